@@ -1,0 +1,140 @@
+"""Load and validate mission and world files, reporting every problem at once as FILE:LINE:COL: message."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from mission.errors import Diagnostic, MissionError, PluginError
+from mission.language.checks import Parts, cross_check
+from mission.language.models import Home, KnownObject, Mission, Plugins, RouteElement, Safety, Sensors
+from mission.language.source import Located, read_yaml
+from mission.language.validation import validate_as
+from mission.plugins import describe_installed, installed_plugins
+from mission.world.model import World
+
+
+def _mapping_document(doc: Located, what: str) -> list[Diagnostic]:
+    if doc.problems and doc.data is None:
+        return []
+    if not isinstance(doc.data, dict):
+        kind = type(doc.data).__name__ if doc.data is not None else "nothing"
+        kind = {"list": "a list", "str": "a string", "int": "a number", "float": "a number"}.get(kind, kind)
+        return [doc.diagnostic((), f"a {what} file must be a mapping of keys, but this document is {kind}")]
+    return []
+
+
+def _parts(doc: Located) -> Parts:
+    """Validate each section on its own, silently, so that cross-checks run on whatever is well-formed."""
+    data: dict[str, Any] = doc.data
+    parts = Parts()
+    for key, model in (("safety", Safety), ("sensors", Sensors), ("plugins", Plugins), ("home", Home)):
+        if key in data:
+            value, _ = validate_as(doc, model, (key,))
+            setattr(parts, key, value)
+        else:
+            setattr(parts, key, model())
+    for key, model, store in (("objects", KnownObject, parts.objects), ("route", RouteElement, parts.route)):
+        items = data.get(key)
+        if isinstance(items, list):
+            for i in range(len(items)):
+                value, _ = validate_as(doc, model, (key, i))
+                if value is not None:
+                    store.append((i, value))
+    return parts
+
+
+def _check_plugins(doc: Located, plugins: Plugins | None) -> list[Diagnostic]:
+    if plugins is None:
+        return []
+    try:
+        installed = installed_plugins()
+    except PluginError as exc:
+        return [doc.diagnostic(("plugins",), str(exc))]
+    out = []
+    for role, name in plugins.model_dump().items():
+        if name is not None and name not in installed:
+            out.append(doc.diagnostic(("plugins", role), f"perception plug-in '{name}' ({role}) is not installed "
+                                                         f"(installed: {describe_installed()})"))
+    return out
+
+
+def resolve_world_path(mission_file: Path, world: str) -> Path:
+    path = Path(world).expanduser()
+    return path if path.is_absolute() else (mission_file.parent / path).resolve()
+
+
+def validate_world_file(path: Path, database: list[KnownObject] | None = None) -> tuple[World | None, list[Diagnostic]]:
+    """Validate a world file, and (given the mission's database) that objects it ties to the database exist."""
+    doc = read_yaml(path)
+    diags = list(doc.problems) + _mapping_document(doc, "world")
+    if diags:
+        return None, diags
+    world, errs = validate_as(doc, World)
+    diags += errs
+    if world is not None:
+        ids = [o.id for o in world.objects]
+        for i, obj in enumerate(world.objects):
+            if ids.index(obj.id) != i:
+                diags.append(doc.diagnostic(("objects", i, "id"), f"duplicate world object id '{obj.id}'"))
+            if database is not None and obj.database is not None and obj.database not in {o.id for o in database}:
+                diags.append(doc.diagnostic(("objects", i, "database"), f"object '{obj.database}' is not in the "
+                                            "mission's database, so its true pose cannot be derived from it"))
+    return (world if not diags else None), diags
+
+
+def validate_mission_file(path: str | Path) -> tuple[Mission | None, list[Diagnostic]]:
+    """Validate a mission file completely; (the mission if it is valid, every problem found)."""
+    path = Path(path)
+    doc = read_yaml(path)
+    diags = list(doc.problems) + _mapping_document(doc, "mission")
+    if doc.data is None or not isinstance(doc.data, dict):
+        return None, diags
+    mission, errs = validate_as(doc, Mission)
+    diags += errs
+    parts = _parts(doc) if mission is None else Parts(
+        mission.safety, mission.sensors, mission.plugins, mission.home,
+        list(enumerate(mission.objects)), list(enumerate(mission.route)))
+    diags += cross_check(doc, parts)
+    diags += _check_plugins(doc, parts.plugins)
+    world = doc.data.get("world")
+    if isinstance(world, str):
+        world_path = resolve_world_path(path, world)
+        if not world_path.is_file():
+            diags.append(doc.diagnostic(("world",), f"world file '{world}' not found (looked at {world_path})"))
+        else:
+            _, world_errs = validate_world_file(world_path, [o for _, o in parts.objects])
+            diags += world_errs
+            if mission is not None:
+                mission = mission.model_copy(update={"world": str(world_path)})
+    if mission is not None:
+        mission._source = str(path)
+    return (mission if not diags else None), sorted(set(diags), key=lambda d: (d.file, d.line, d.col, d.message))
+
+
+def load_mission(path: str | Path) -> Mission:
+    """Load a mission, raising MissionError with every problem if it is not valid."""
+    mission, diags = validate_mission_file(path)
+    if diags or mission is None:
+        raise MissionError(diags)
+    return mission
+
+
+def load_world(path: str | Path, database: list[KnownObject] | None = None) -> World:
+    world, diags = validate_world_file(Path(path), database)
+    if diags or world is None:
+        raise MissionError(diags)
+    return world
+
+
+def mission_schema() -> dict[str, Any]:
+    """JSON Schema of mission language v1, for editors."""
+    schema = Mission.model_json_schema()
+    schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
+    schema["title"] = "auv-mission: mission language v1"
+    return schema
+
+
+def mission_schema_json() -> str:
+    return json.dumps(mission_schema(), indent=2)

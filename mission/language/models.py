@@ -1,0 +1,281 @@
+"""Typed, immutable models of mission language v1 (seed 002 §1, Fig. 1; §3.4, Fig. 11).
+
+A mission is a list of route elements (`transit`, `survey`, `explore`, `inspect`), an onboard database of known
+objects with characteristic-point sets and targets in object frames, the vehicle, its sensors, the perception
+plug-ins and the safety envelope. Defaults live here, in code; unknown keys are rejected.
+Frames: local NED in metres, headings in degrees clockwise from north.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, model_validator
+
+from mission.language.units import Duration, Percent
+
+Vec2 = tuple[float, float]
+Vec3 = tuple[float, float, float]
+Polygon = Annotated[list[Vec2], Field(min_length=3, description="[[north, east], ...] in metres")]
+Identifier = Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.\-]+$")]
+Positive = Annotated[float, Field(gt=0)]
+NonNegative = Annotated[float, Field(ge=0)]
+
+
+class Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Origin(Strict):
+    """Geodetic origin of the local NED frame (used for exports only)."""
+
+    lat: Annotated[float, Field(ge=-90, le=90)]
+    lon: Annotated[float, Field(ge=-180, le=180)]
+
+
+class Home(Strict):
+    """The launch point, in the local frame. `transit: {to: home}` returns here."""
+
+    north: float = 0.0
+    east: float = 0.0
+    depth: NonNegative = 0.0
+    heading: float = 0.0
+
+
+class Vehicle(Strict):
+    cruise_speed: Positive = 1.5
+    max_speed: Positive = 2.0
+    max_acceleration: Positive = 0.2
+    max_yaw_rate: Positive = 15.0
+    max_vertical_speed: Positive = 0.5
+    turn_radius: NonNegative = 6.0
+    energy_wh: Positive = 4000.0
+    hotel_power_w: NonNegative = 60.0
+    propulsion_power_w: NonNegative = 180.0
+
+    @model_validator(mode="after")
+    def _cruise_within_max(self) -> Vehicle:
+        if self.cruise_speed > self.max_speed:
+            raise ValueError(f"cruise_speed {self.cruise_speed} exceeds max_speed {self.max_speed}")
+        return self
+
+
+class Mbes(Strict):
+    beams: Annotated[int, Field(ge=2)] = 256
+    swath_deg: Annotated[float, Field(gt=0, lt=180)] = 120.0
+    max_range: Positive = 80.0
+    rate_hz: Positive = 10.0
+    range_sigma: NonNegative = 0.05
+
+
+class Stereo(Strict):
+    width: Annotated[int, Field(ge=16)] = 1200
+    height: Annotated[int, Field(ge=16)] = 900
+    fx: Positive = 1000.0
+    baseline: Positive = 0.25
+    rate_hz: Positive = 10.0
+    max_range: Positive = 8.0
+
+
+class Scanner(Strict):
+    fov_deg: tuple[Annotated[float, Field(gt=0, lt=180)], Annotated[float, Field(gt=0, lt=180)]] = (60.0, 45.0)
+    max_range: Positive = 12.0
+    rate_hz: Positive = 2.0
+
+
+class Usbl(Strict):
+    sigma: NonNegative = 1.5
+    rate_hz: Positive = 0.5
+
+
+class Dvl(Strict):
+    drift_percent: NonNegative = 0.5
+    velocity_sigma: NonNegative = 0.01
+    max_altitude: Positive = 100.0
+
+
+class Sensors(Strict):
+    mbes: Mbes | None = None
+    stereo: Stereo | None = None
+    scanner: Scanner | None = None
+    usbl: Usbl | None = None
+    dvl: Dvl = Dvl()
+
+
+class Plugins(Strict):
+    """Entry-point names (group `auv.perception`) of the perception plug-ins the mission uses."""
+
+    referencing: str | None = None
+    odometry: str | None = None
+
+
+class AbortTo(Strict):
+    north: float
+    east: float
+    depth: NonNegative = 0.0
+
+
+class OnViolation(Strict):
+    """What the executive does when a safety monitor trips: go to a point (or home) and surface there."""
+
+    abort_to: Literal["home"] | AbortTo = "home"
+    surface: bool = True
+
+
+class Safety(Strict):
+    geofence: Polygon | None = None
+    max_depth: Positive = 300.0
+    min_altitude: NonNegative = 1.0
+    max_duration: Duration = 6 * 3600.0
+    energy_reserve: Percent = 20.0
+    on_violation: OnViolation = OnViolation()
+
+
+class Pose(Strict):
+    """Pose of an object frame in the world: position of its origin and heading of its x-axis."""
+
+    north: float
+    east: float
+    depth: float
+    heading: float = 0.0
+
+
+class PointSet(Strict):
+    id: Identifier
+    points: list[Vec3]
+
+
+class Target(Strict):
+    id: Identifier
+    at: Vec3
+    reference: Identifier
+    standoff: Positive = 2.0
+    photos: Annotated[int, Field(ge=1)] = 1
+
+
+class KnownObject(Strict):
+    id: Identifier
+    description: str = ""
+    pose: Pose
+    size: tuple[Positive, Positive, Positive]
+    characteristic_points: list[PointSet] = []
+    targets: list[Target] = []
+
+
+class Point(Strict):
+    north: float
+    east: float
+
+
+class Transit(Strict):
+    """Go to a point (or home) at a depth or an altitude; with neither, keep the current depth."""
+
+    to: Literal["home"] | Point
+    depth: NonNegative | None = None
+    altitude: NonNegative | None = None
+    speed: Positive | None = None
+    navigation: Literal["usbl", "dead-reckoning"] = "usbl"
+    capture_radius: Positive = 3.0
+
+    @model_validator(mode="after")
+    def _depth_or_altitude(self) -> Transit:
+        if self.depth is not None and self.altitude is not None:
+            raise ValueError("give either depth or altitude, not both")
+        return self
+
+
+class Survey(Strict):
+    area: Polygon
+    exclude: list[Polygon] = []
+    sensor: Literal["mbes"] = "mbes"
+    altitude: Positive
+    overlap: Percent = 20.0
+    pattern: Literal["meander"] = "meander"
+    heading: float | Literal["auto"] = "auto"
+    speed: Positive | None = None
+
+
+class Weights(Strict):
+    distance: NonNegative = 0.3
+    frontier: NonNegative = 0.5
+    contour: NonNegative = 0.2
+
+
+class Explore(Strict):
+    object: Identifier = "detected"
+    sensor: Literal["scanner", "stereo", "mbes"] = "scanner"
+    planner: Literal["next-best-view", "rrt-photo"] = "next-best-view"
+    weights: Weights = Weights()
+    safe_distance: Positive = 5.0
+    budget: Duration = 900.0
+
+
+class Search(Strict):
+    pattern: Literal["expanding-square", "lawnmower"] = "expanding-square"
+    budget: Duration = 300.0
+
+
+class Inspect(Strict):
+    object: Identifier
+    targets: Literal["all"] | list[Identifier] = "all"
+    order: Literal["auto", "as-listed"] = "auto"
+    search: Search = Search()
+
+
+Action = Literal["map", "detect_objects", "photograph", "model", "record"]
+ELEMENT_KINDS = ("transit", "survey", "explore", "inspect")
+
+
+class RouteElement(Strict):
+    """One element of the route: exactly one motion kind, what to do, and how long it may take."""
+
+    id: Identifier
+    transit: Transit | None = None
+    survey: Survey | None = None
+    explore: Explore | None = None
+    inspect: Inspect | None = None
+    actions: list[Action] = []
+    timeout: Duration | None = None
+    on_failure: Literal["continue", "abort"] = "continue"
+
+    @model_validator(mode="after")
+    def _exactly_one_kind(self) -> RouteElement:
+        given = [k for k in ELEMENT_KINDS if getattr(self, k) is not None]
+        if len(given) != 1:
+            found = ", ".join(given) if given else "none"
+            raise ValueError(f"a route element needs exactly one of {', '.join(ELEMENT_KINDS)} (found: {found})")
+        return self
+
+    @property
+    def kind(self) -> str:
+        return next(k for k in ELEMENT_KINDS if getattr(self, k) is not None)
+
+    @property
+    def params(self) -> Transit | Survey | Explore | Inspect:
+        return getattr(self, self.kind)  # type: ignore[no-any-return]
+
+
+class Mission(Strict):
+    """A whole mission. The loader resolves `world` to an absolute path and records the source file."""
+
+    name: Identifier
+    description: str = ""
+    origin: Origin = Origin(lat=0.0, lon=0.0)
+    world: str | None = None
+    seed: int = 0
+    home: Home = Home()
+    vehicle: Vehicle = Vehicle()
+    sensors: Sensors = Sensors()
+    plugins: Plugins = Plugins()
+    safety: Safety = Safety()
+    objects: list[KnownObject] = []
+    route: Annotated[list[RouteElement], Field(min_length=1)]
+    _source: str | None = PrivateAttr(default=None)
+
+    @property
+    def source(self) -> str | None:
+        """The file the mission was loaded from, if any."""
+        return self._source
+
+    def object(self, object_id: str) -> KnownObject:
+        return next(o for o in self.objects if o.id == object_id)

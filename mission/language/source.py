@@ -1,0 +1,110 @@
+"""YAML documents with the location of every node, so that each error can say FILE:LINE:COL.
+
+PyYAML's safe composer gives nodes with marks; this module turns them into plain Python values and a table
+from value paths (tuples of keys and indices) to 1-based (line, col) positions. Duplicate keys are reported,
+not silently overwritten.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from mission.errors import Diagnostic
+
+PathKey = tuple[str | int, ...]
+_SCALARS = yaml.constructor.SafeConstructor()
+
+
+@dataclass
+class Located:
+    """A parsed YAML document: plain values plus where each path sits in the file."""
+
+    file: str
+    data: Any
+    value_at: dict[PathKey, tuple[int, int]] = field(default_factory=dict)
+    key_at: dict[PathKey, tuple[int, int]] = field(default_factory=dict)
+    problems: list[Diagnostic] = field(default_factory=list)
+
+    def where(self, path: PathKey, *, key: bool = False) -> tuple[int, int]:
+        """Position of the node at `path` (its key if `key`), falling back to the nearest ancestor."""
+        table = self.key_at if key else self.value_at
+        probe = tuple(path)
+        while probe:
+            if probe in table:
+                return table[probe]
+            if probe in self.value_at:
+                return self.value_at[probe]
+            probe = probe[:-1]
+        return self.value_at.get((), (1, 1))
+
+    def diagnostic(self, path: PathKey, message: str, *, key: bool = False) -> Diagnostic:
+        line, col = self.where(path, key=key)
+        return Diagnostic(self.file, line, col, message)
+
+
+def _position(node: yaml.Node) -> tuple[int, int]:
+    return node.start_mark.line + 1, node.start_mark.column + 1
+
+
+def _build(doc: Located, node: yaml.Node, path: PathKey) -> Any:
+    doc.value_at[path] = _position(node)
+    if isinstance(node, yaml.MappingNode):
+        out: dict[Any, Any] = {}
+        for key_node, value_node in node.value:
+            key = _build(doc, key_node, path + ("<key>",))
+            if not isinstance(key, (str, int, float, bool)) or key is None:
+                doc.problems.append(Diagnostic(doc.file, *_position(key_node), "a mapping key must be a scalar"))
+                continue
+            key = str(key) if not isinstance(key, str) else key
+            if key in out:
+                doc.problems.append(
+                    Diagnostic(doc.file, *_position(key_node), f"duplicate key '{key}'")
+                )
+            doc.key_at[path + (key,)] = _position(key_node)
+            out[key] = _build(doc, value_node, path + (key,))
+        doc.value_at.pop(path + ("<key>",), None)
+        return out
+    if isinstance(node, yaml.SequenceNode):
+        return [_build(doc, item, path + (i,)) for i, item in enumerate(node.value)]
+    return _SCALARS.construct_object(node)  # type: ignore[no-untyped-call]
+
+
+def parse_yaml(text: str, file: str) -> Located:
+    """Parse one YAML document; syntax errors become diagnostics, never exceptions."""
+    doc = Located(file=file, data=None)
+    try:
+        node = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
+        message = f"YAML syntax error: {exc.problem or exc.context}"
+        doc.problems.append(Diagnostic(file, line, col, message))
+        return doc
+    except yaml.YAMLError as exc:
+        doc.problems.append(Diagnostic(file, 1, 1, f"YAML error: {exc}"))
+        return doc
+    if node is None:
+        doc.problems.append(Diagnostic(file, 1, 1, "the document is empty; expected a mapping"))
+        return doc
+    try:
+        doc.data = _build(doc, node, ())
+    except yaml.constructor.ConstructorError as exc:
+        mark = exc.problem_mark
+        line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
+        doc.problems.append(Diagnostic(file, line, col, f"YAML error: {exc.problem}"))
+    return doc
+
+
+def read_yaml(path: Path) -> Located:
+    """Read and parse a YAML file; an unreadable file is one diagnostic at 1:1."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        doc = Located(file=str(path), data=None)
+        doc.problems.append(Diagnostic(str(path), 1, 1, f"cannot read file: {exc}"))
+        return doc
+    return parse_yaml(text, str(path))

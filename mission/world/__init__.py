@@ -1,0 +1,1 @@
+"""Simulated worlds: seabed height fields, subsea objects as they truly lie, currents."""
