@@ -65,8 +65,8 @@ def resolve_world_path(mission_file: Path, world: str) -> Path:
     return path if path.is_absolute() else (mission_file.parent / path).resolve()
 
 
-def validate_world_file(path: Path, database: list[KnownObject] | None = None) -> tuple[World | None, list[Diagnostic]]:
-    """Validate a world file, and (given the mission's database) that objects it ties to the database exist."""
+def validate_world_file(path: Path) -> tuple[World | None, list[Diagnostic]]:
+    """Validate a world file."""
     doc = read_yaml(path)
     diags = list(doc.problems) + _mapping_document(doc, "world")
     if diags:
@@ -78,9 +78,6 @@ def validate_world_file(path: Path, database: list[KnownObject] | None = None) -
         for i, obj in enumerate(world.objects):
             if ids.index(obj.id) != i:
                 diags.append(doc.diagnostic(("objects", i, "id"), f"duplicate world object id '{obj.id}'"))
-            if database is not None and obj.database is not None and obj.database not in {o.id for o in database}:
-                diags.append(doc.diagnostic(("objects", i, "database"), f"object '{obj.database}' is not in the "
-                                            "mission's database, so its true pose cannot be derived from it"))
     return (world if not diags else None), diags
 
 
@@ -104,7 +101,7 @@ def validate_mission_file(path: str | Path) -> tuple[Mission | None, list[Diagno
         if not world_path.is_file():
             diags.append(doc.diagnostic(("world",), f"world file '{world}' not found (looked at {world_path})"))
         else:
-            _, world_errs = validate_world_file(world_path, [o for _, o in parts.objects])
+            _, world_errs = validate_world_file(world_path)
             diags += world_errs
             if mission is not None:
                 mission = mission.model_copy(update={"world": str(world_path)})
@@ -121,8 +118,8 @@ def load_mission(path: str | Path) -> Mission:
     return mission
 
 
-def load_world(path: str | Path, database: list[KnownObject] | None = None) -> World:
-    world, diags = validate_world_file(Path(path), database)
+def load_world(path: str | Path) -> World:
+    world, diags = validate_world_file(Path(path))
     if diags or world is None:
         raise MissionError(diags)
     return world

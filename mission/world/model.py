@@ -1,8 +1,8 @@
 """World files: the seabed, the subsea objects as they truly are, and the water current (simulation only).
 
-A world object is either placed absolutely (`pose`, with optional tilt) or tied to an object of the mission's
-onboard database (`database`) and displaced from that a-priori pose by `offset` (shift, rotation, tilt): the
-database is "off by metres", and the world says by how much.
+Each world object has a charted `pose` (what a database would hold) and an optional `offset` (shift, rotation,
+tilt) by which the truth differs from it: databases are "off by metres", and the world says by how much. The
+truth belongs to the world alone; `database` names the mission-database object it is, for matching in metrics.
 """
 
 from __future__ import annotations
@@ -104,17 +104,9 @@ class WorldObject(Strict):
 
     id: Identifier
     database: Identifier | None = None
-    pose: TruePose | None = None
-    offset: Offset | None = None
+    pose: TruePose
+    offset: Offset = Offset()
     parts: Annotated[list[Part], Field(min_length=1)]
-
-    @model_validator(mode="after")
-    def _placed_once(self) -> WorldObject:
-        if self.pose is None and self.database is None:
-            raise ValueError("give the object a `pose`, or a `database` id (with an optional `offset`)")
-        if self.pose is not None and self.offset is not None:
-            raise ValueError("give either `pose` or `offset` (relative to the database pose), not both")
-        return self
 
 
 class World(Strict):

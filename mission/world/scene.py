@@ -1,4 +1,4 @@
-"""A world resolved against a mission's database: true object poses, part geometry in the world frame, and a
+"""A world made concrete: true object poses, part geometry in the world frame, and a
 surface (seabed or object top) that the simulated altimeter sees.
 """
 
@@ -12,7 +12,6 @@ import shapely
 from shapely.geometry import MultiPoint, Polygon
 
 from mission.frames import Array, pose_matrix, transform_points
-from mission.language.models import KnownObject
 from mission.world.model import Box, Cylinder, Part, World, WorldObject
 from mission.world.terrain import HeightField, generate_seabed
 
@@ -82,19 +81,11 @@ def _part_corners(part: Part) -> Array:
     return np.vstack(pts) + (cx, cy, cz)
 
 
-def true_pose(obj: WorldObject, database: dict[str, KnownObject]) -> Array:
-    """T_world_object of a world object: its own pose, or the database pose displaced by its offset."""
-    if obj.pose is not None:
-        p = obj.pose
-        return pose_matrix(p.north, p.east, p.depth, p.heading, p.pitch, p.roll)
-    assert obj.database is not None
-    if obj.database not in database:
-        raise KeyError(obj.database)
-    base = database[obj.database].pose
-    off = obj.offset
-    dn, de, dd = (off.north, off.east, off.depth) if off else (0.0, 0.0, 0.0)
-    heading, pitch, roll = (off.heading, off.pitch, off.roll) if off else (0.0, 0.0, 0.0)
-    return pose_matrix(base.north + dn, base.east + de, base.depth + dd, base.heading + heading, pitch, roll)
+def true_pose(obj: WorldObject) -> Array:
+    """T_world_object of a world object: its charted pose displaced by its offset."""
+    p, off = obj.pose, obj.offset
+    return pose_matrix(p.north + off.north, p.east + off.east, p.depth + off.depth, p.heading + off.heading,
+                       p.pitch + off.pitch, p.roll + off.roll)
 
 
 def _place(obj: WorldObject, T_world_object: Array) -> PlacedObject:
@@ -122,11 +113,10 @@ def _raise_surface(surface: Array, field: HeightField, part: PlacedPart) -> None
     block[inside] = np.minimum(block[inside], part.top_depth)
 
 
-def build_scene(world: World, database: list[KnownObject]) -> Scene:
-    """Resolve a world against the mission's database and rasterise the altimeter surface."""
+def build_scene(world: World) -> Scene:
+    """Place the world's objects and rasterise the surface the altimeter sees."""
     seabed = generate_seabed(world.seabed)
-    by_id = {o.id: o for o in database}
-    placed = tuple(_place(o, true_pose(o, by_id)) for o in world.objects)
+    placed = tuple(_place(o, true_pose(o)) for o in world.objects)
     surface = seabed.depth.copy()
     for obj in placed:
         for part in obj.parts:

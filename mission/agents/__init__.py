@@ -1,0 +1,25 @@
+"""Tactical agents by route-element kind. Later issues register `survey`, `explore` and `inspect` here."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from mission.agents.base import Agent, AgentContext, Status
+from mission.agents.transit import TransitAgent
+
+AgentFactory = Callable[[], Agent]
+
+REGISTRY: dict[str, AgentFactory] = {
+    "transit": TransitAgent,
+}
+
+
+def supported_kinds() -> list[str]:
+    return sorted(REGISTRY)
+
+
+def create_agent(kind: str) -> Agent:
+    return REGISTRY[kind]()
+
+
+__all__ = ["Agent", "AgentContext", "REGISTRY", "Status", "TransitAgent", "create_agent", "supported_kinds"]

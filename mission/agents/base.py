@@ -1,0 +1,66 @@
+"""The tactical-agent contract (seed 002 §1: the tactical level runs one agent per route element).
+
+The executive owns the loop. An agent implements five calls:
+
+- `start(context)`: once, when its element begins; plan here from the estimated state in `context`.
+- `step(observation) -> Command`: every control tick; decide the autopilot setpoints.
+- `status`: RUNNING until the agent has SUCCEEDED or FAILED (with `reason`).
+- `planned_path()`: the (north, east) polyline it intends to follow, for logs and plots.
+- `stop()`: when the element ends for any reason (done, timeout, abort); release what it holds.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from mission.language.models import Mission, RouteElement
+from mission.vehicle import Command, NavState, Observation
+
+
+class Status(enum.Enum):
+    RUNNING = "running"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+
+
+@dataclass(frozen=True)
+class AgentContext:
+    """What an agent may know when it starts: the mission, its element, the estimate, and an event emitter."""
+
+    mission: Mission
+    element: RouteElement
+    nav: NavState
+    emit: Callable[..., None] = field(default=lambda *a, **k: None)
+
+
+class Agent:
+    """Base class with no-op defaults; subclasses set `kind` and implement `start` and `step`."""
+
+    kind: ClassVar[str] = ""
+
+    def __init__(self) -> None:
+        self.status: Status = Status.RUNNING
+        self.reason: str = ""
+        self.navigation: str = "usbl"  # "usbl" or "dead-reckoning": which aiding the agent asks for
+        self.details: dict[str, Any] = {}  # element results for metrics (agent-specific)
+
+    def start(self, context: AgentContext) -> None:
+        raise NotImplementedError
+
+    def step(self, observation: Observation) -> Command:
+        raise NotImplementedError
+
+    def planned_path(self) -> list[tuple[float, float]]:
+        return []
+
+    def stop(self) -> None:
+        return None
+
+    def succeed(self) -> None:
+        self.status = Status.SUCCEEDED
+
+    def fail(self, reason: str) -> None:
+        self.status, self.reason = Status.FAILED, reason

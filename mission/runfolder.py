@@ -1,0 +1,117 @@
+"""Run folders: one writer and one reader for the files `auv simulate` leaves behind.
+
+    DIR/mission.yaml      the mission as run (seed filled in, world pointing at the copy beside it)
+    DIR/world.yaml        the world the run used
+    DIR/trajectory.csv    time, true and estimated pose, altitude, per control step
+    DIR/usbl.csv          acoustic fixes: time, north, east, used, accepted
+    DIR/events.jsonl      events, flushed as they happened
+    DIR/metrics.json      the run's metrics
+    DIR/plots/*.png       figures (`auv plot DIR` redraws them)
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from mission.errors import MissionError, RunFolderError
+from mission.events import read_events
+from mission.language.loader import load_mission
+from mission.language.models import Mission
+from mission.sim.vehicle import TRAJECTORY_COLUMNS, SimulatedVehicle
+
+
+def prepare_run_folder(out: Path, mission: Mission, seed: int) -> None:
+    """Create the folder and write the mission as run and its world, before the run starts."""
+    out.mkdir(parents=True, exist_ok=True)
+    for stale in ("events.jsonl", "metrics.json", "trajectory.csv", "usbl.csv"):
+        (out / stale).unlink(missing_ok=True)
+    as_run = mission.model_dump(mode="json")
+    as_run["seed"] = seed
+    if mission.world is not None:
+        shutil.copyfile(mission.world, out / "world.yaml")
+        as_run["world"] = "world.yaml"
+    header = f"# The mission as run (seed {seed}), from {mission.source or 'memory'}.\n"
+    (out / "mission.yaml").write_text(header + yaml.safe_dump(as_run, sort_keys=False), encoding="utf-8")
+
+
+def write_run_results(out: Path, metrics: dict[str, Any], vehicle: SimulatedVehicle) -> None:
+    with (out / "trajectory.csv").open("w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(TRAJECTORY_COLUMNS)
+        for row in vehicle.log.rows:
+            w.writerow([f"{v:.4f}" if isinstance(v, float) else v for v in row])
+    with (out / "usbl.csv").open("w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(("time", "north", "east", "used", "accepted"))
+        for fix in vehicle.log.fixes:
+            w.writerow((f"{fix.time:.2f}", f"{fix.north:.3f}", f"{fix.east:.3f}", int(fix.used), int(fix.accepted)))
+    (out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n", encoding="utf-8")
+
+
+@dataclass
+class RunData:
+    """A run folder read back: everything the plots need."""
+
+    folder: Path
+    mission: Mission
+    trajectory: dict[str, np.ndarray]
+    elements: list[str]
+    fixes: dict[str, np.ndarray]
+    events: list[dict[str, Any]]
+    metrics: dict[str, Any]
+
+
+def _read_csv(path: Path, text_columns: tuple[str, ...] = ()) -> tuple[dict[str, np.ndarray], dict[str, list[str]]]:
+    try:
+        with path.open(newline="", encoding="utf-8") as f:
+            rows = list(csv.reader(f))
+    except OSError as exc:
+        raise RunFolderError(f"{path}: cannot read ({exc.strerror})") from exc
+    if not rows:
+        raise RunFolderError(f"{path}: empty; expected a header line")
+    header, body = rows[0], rows[1:]
+    numeric, text = {}, {}
+    for k, name in enumerate(header):
+        values = [r[k] if k < len(r) else "" for r in body]
+        if name in text_columns:
+            text[name] = values
+            continue
+        try:
+            numeric[name] = np.array([float(v) if v != "" else np.nan for v in values])
+        except ValueError as exc:
+            raise RunFolderError(f"{path}: column '{name}' holds a non-number ({exc})") from exc
+    return numeric, text
+
+
+def read_run_folder(folder: str | Path) -> RunData:
+    """Read a run folder written by `auv simulate` (RunFolderError says what is missing or malformed)."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise RunFolderError(f"{folder}: not a run folder (no such directory)")
+    for name in ("mission.yaml", "trajectory.csv", "events.jsonl", "metrics.json"):
+        if not (folder / name).is_file():
+            raise RunFolderError(f"{folder}: not a complete run folder (missing {name})")
+    try:
+        mission = load_mission(folder / "mission.yaml")
+    except MissionError as exc:
+        raise RunFolderError(f"{folder}/mission.yaml is not a valid mission:\n{exc}") from exc
+    traj, text = _read_csv(folder / "trajectory.csv", ("element",))
+    missing = [c for c in TRAJECTORY_COLUMNS if c not in traj and c not in text]
+    if missing:
+        raise RunFolderError(f"{folder}/trajectory.csv lacks column(s) {', '.join(missing)}")
+    fixes: dict[str, np.ndarray] = {}
+    if (folder / "usbl.csv").is_file():
+        fixes, _ = _read_csv(folder / "usbl.csv")
+    try:
+        metrics = json.loads((folder / "metrics.json").read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise RunFolderError(f"{folder}/metrics.json: not JSON ({exc})") from exc
+    return RunData(folder, mission, traj, text["element"], fixes, read_events(folder / "events.jsonl"), metrics)

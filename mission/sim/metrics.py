@@ -1,0 +1,65 @@
+"""Metrics of a simulated run: what the executive reported, measured against the truth the simulator kept."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from mission.executive import ExecutionReport
+from mission.sim.vehicle import SimulatedVehicle
+
+
+def _element_metrics(report: ExecutionReport, times: np.ndarray, north: np.ndarray, east: np.ndarray
+                     ) -> list[dict[str, Any]]:
+    out = []
+    for rep in report.elements:
+        item: dict[str, Any] = {"id": rep.id, "kind": rep.kind, "status": rep.status,
+                                "duration_s": round(rep.duration_s, 2)}
+        if rep.reason:
+            item["reason"] = rep.reason
+        if rep.kind == "transit" and rep.planned_path and math.isfinite(rep.end_time) and len(times):
+            k = min(int(np.searchsorted(times, rep.end_time)), len(times) - 1)
+            goal = rep.planned_path[-1]
+            item["goal"] = [round(goal[0], 3), round(goal[1], 3)]
+            item["end_position_error_m"] = round(math.hypot(north[k] - goal[0], east[k] - goal[1]), 3)
+        item.update(rep.details)
+        out.append(item)
+    return out
+
+
+def run_metrics(mission_name: str, seed: int, report: ExecutionReport, vehicle: SimulatedVehicle,
+                wall_time_s: float) -> dict[str, Any]:
+    """The `metrics.json` of a run (see the output contract in the README)."""
+    rows = vehicle.log.rows
+    arr = np.array([r[:14] for r in rows], dtype=float) if rows else np.zeros((0, 14))
+    times, north, east, depth = arr[:, 0], arr[:, 1], arr[:, 2], arr[:, 3]
+    err = np.hypot(arr[:, 6] - north, arr[:, 7] - east)
+    mission_time = report.end_time - report.start_time
+    fixes = vehicle.log.fixes
+    capacity = vehicle.mission.vehicle.energy_wh
+    return {
+        "mission": mission_name,
+        "seed": seed,
+        "completed": report.completed,
+        "aborted": report.aborted,
+        "abort_reason": report.abort_reason or None,
+        "mission_time_s": round(mission_time, 2),
+        "wall_time_s": round(wall_time_s, 3),
+        "realtime_factor": round(mission_time / wall_time_s, 1) if wall_time_s > 0 else None,
+        "distance_m": round(vehicle.distance_m, 2),
+        "energy_wh": round(vehicle.energy_used_wh, 2),
+        "energy_remaining_percent": round(100.0 * (1.0 - vehicle.energy_used_wh / capacity), 2),
+        "elements": _element_metrics(report, times, north, east),
+        "safety_violations": report.violations,
+        "seabed_contacts": vehicle.log.seabed_contacts,
+        "navigation": {
+            "position_error_rms_m": round(float(np.sqrt(np.mean(err**2))), 3) if len(err) else 0.0,
+            "position_error_max_m": round(float(err.max()), 3) if len(err) else 0.0,
+            "position_error_final_m": round(float(err[-1]), 3) if len(err) else 0.0,
+            "depth_error_rms_m": round(float(np.sqrt(np.mean((arr[:, 8] - depth) ** 2))), 3) if len(err) else 0.0,
+            "usbl_fixes": sum(1 for f in fixes if f.used),
+            "usbl_rejected": sum(1 for f in fixes if f.used and not f.accepted),
+        },
+    }

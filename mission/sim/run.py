@@ -1,0 +1,94 @@
+"""Simulate a mission end to end and write its run folder (the output contract of `auv simulate`)."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from mission.agents import REGISTRY
+from mission.errors import AuvError, UnsupportedMissionError
+from mission.events import EventLog
+from mission.executive import ExecutionReport, Executive
+from mission.language.loader import load_world
+from mission.language.models import Mission
+from mission.sim.metrics import run_metrics
+from mission.sim.vehicle import SimulatedVehicle
+from mission.vehicle import NavState
+from mission.world.scene import Scene, build_scene
+
+
+@dataclass
+class RunResult:
+    metrics: dict[str, Any]
+    report: ExecutionReport
+    vehicle: SimulatedVehicle
+    scene: Scene
+    out: Path | None
+
+
+def check_supported(mission: Mission) -> None:
+    """Refuse, before anything starts, a mission whose route uses kinds with no agent yet."""
+    missing = [e for e in mission.route if e.kind not in REGISTRY]
+    if missing:
+        kinds = sorted({e.kind for e in missing})
+        where = ", ".join(f"{e.id} ({e.kind})" for e in missing)
+        raise UnsupportedMissionError(
+            f"cannot simulate '{mission.name}': route element kind(s) {', '.join(kinds)} not supported yet "
+            f"(used by {where}); supported: {', '.join(sorted(REGISTRY))}")
+
+
+def simulate(mission: Mission, seed: int | None = None, out: str | Path | None = None, plots: bool = True,
+             progress: bool = False, dt: float = 0.2) -> RunResult:
+    """Run `mission` in its world with a simulated vehicle; with `out`, write the run folder there."""
+    check_supported(mission)
+    if mission.world is None:
+        raise AuvError(f"mission '{mission.name}' names no world; simulation needs `world:`")
+    seed = mission.seed if seed is None else seed
+    scene = build_scene(load_world(mission.world))
+    vehicle = SimulatedVehicle(mission, scene, seed, dt)
+    out_dir = Path(out) if out is not None else None
+    if out_dir is not None:
+        from mission.runfolder import prepare_run_folder
+
+        prepare_run_folder(out_dir, mission, seed)
+    log = EventLog(out_dir / "events.jsonl" if out_dir else None)
+    bar = _progress_bar(mission) if progress else None
+
+    def emit(event: str, t: float, **fields: Any) -> None:
+        if event == "element_started":
+            vehicle.element = str(fields.get("element", ""))
+        log.emit(event, t, **fields)
+        if bar is not None and event.startswith("element"):
+            bar.set_postfix_str(f"{fields.get('element', '')}: {event.split('_')[1]}")
+
+    def tick(nav: NavState) -> None:
+        if bar is not None and int(nav.time) > bar.n:
+            bar.update(int(nav.time) - bar.n)
+
+    wall0 = time.perf_counter()
+    try:
+        report = Executive(mission, vehicle, emit, on_tick=tick).run()
+    finally:
+        log.close()
+        if bar is not None:
+            bar.close()
+    wall = time.perf_counter() - wall0
+    metrics = run_metrics(mission.name, seed, report, vehicle, wall)
+    if out_dir is not None:
+        from mission.runfolder import write_run_results
+
+        write_run_results(out_dir, metrics, vehicle)
+        if plots:
+            from mission.plots import plot_run
+
+            plot_run(out_dir)
+    return RunResult(metrics, report, vehicle, scene, out_dir)
+
+
+def _progress_bar(mission: Mission) -> Any:
+    from tqdm import tqdm
+
+    return tqdm(total=int(mission.safety.max_duration), unit="sim s", desc=mission.name, leave=False,
+                mininterval=0.5, bar_format="{desc}: {n_fmt} sim s [{elapsed}, {rate_fmt}] {postfix}")

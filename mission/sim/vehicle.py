@@ -1,0 +1,161 @@
+"""The simulated vehicle: true kinematics in a scene, sensors with their errors (DVL/INS, depth, USBL), the
+onboard navigation filter, energy use, and a log of truth against estimate. Behind the `Vehicle` interface the
+executive sees only the estimate.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from dataclasses import dataclass, field
+
+from mission.language.models import Mission
+from mission.navigation import NavigationFilter
+from mission.sim import kinematics
+from mission.sim.kinematics import TrueState
+from mission.vehicle import Command, NavState, Observation
+from mission.world.scene import Scene
+
+HEADING_SIGMA_DEG = 0.3
+DEPTH_SIGMA_M = 0.02
+ALTITUDE_SIGMA_M = 0.05
+USBL_OUTLIER_RATE = 0.02  # multipath: this share of fixes is off by several sigma
+
+TRAJECTORY_COLUMNS = (
+    "time", "north", "east", "depth", "heading", "altitude",
+    "north_est", "east_est", "depth_est", "heading_est", "altitude_est",
+    "position_sigma", "speed", "energy_wh", "element",
+)
+
+
+@dataclass
+class UsblFix:
+    time: float
+    north: float
+    east: float
+    used: bool
+    accepted: bool
+
+
+@dataclass
+class SimLog:
+    rows: list[tuple[object, ...]] = field(default_factory=list)
+    fixes: list[UsblFix] = field(default_factory=list)
+    seabed_contacts: int = 0
+
+
+class SimulatedVehicle:
+    """A kinematic AUV in a scene. `element` is set by the runner so that log rows say what was running."""
+
+    def __init__(self, mission: Mission, scene: Scene, seed: int, dt: float = 0.2):
+        self.mission = mission
+        self.scene = scene
+        self.control_period = dt
+        self.rng = random.Random(seed)
+        home = mission.home
+        self.truth = TrueState(0.0, home.north, home.east, home.depth, home.heading % 360.0, 0.0)
+        dvl = mission.sensors.dvl
+        usbl = mission.sensors.usbl
+        # DVL/INS error as a fixed scale factor and misalignment whose combined size is the configured drift.
+        f = dvl.drift_percent / 100.0
+        theta = self.rng.uniform(0.0, 2.0 * math.pi)
+        self.dvl_scale, self.dvl_misalign = f * math.cos(theta), f * math.sin(theta)
+        self.dvl_sigma = dvl.velocity_sigma
+        self.dvl_max_altitude = dvl.max_altitude
+        self.usbl_sigma = usbl.sigma if usbl else 0.0
+        self.usbl_period = 1.0 / usbl.rate_hz if usbl else math.inf
+        self.next_fix = self.usbl_period
+        self.aiding = usbl is not None
+        self.filter = NavigationFilter(home.north, home.east, max(self.usbl_sigma, 1.0), f, self.dvl_sigma)
+        self.command = Command(self.truth.heading, 0.0, home.depth)
+        self.energy_used_wh = 0.0
+        self.distance_m = 0.0
+        self.element = ""
+        self.log = SimLog()
+        self._measure()
+
+    # -- sensors ---------------------------------------------------------------------------------------------
+    def true_altitude(self) -> float:
+        t = self.truth
+        return self.scene.altitude(t.north, t.east, t.depth)
+
+    def _measure(self) -> None:
+        t = self.truth
+        self.heading_meas = (t.heading + self.rng.gauss(0.0, HEADING_SIGMA_DEG)) % 360.0
+        self.depth_meas = max(t.depth + self.rng.gauss(0.0, DEPTH_SIGMA_M), 0.0)
+        alt = self.true_altitude()
+        self.altitude_meas = alt + self.rng.gauss(0.0, ALTITUDE_SIGMA_M) if 0.0 < alt <= self.dvl_max_altitude \
+            else None
+
+    def _dvl_velocity_world(self) -> tuple[float, float]:
+        """Velocity over ground as the DVL measures it (body frame, biased), rotated by the measured heading."""
+        t = self.truth
+        h = math.radians(t.heading)
+        c, s = math.cos(h), math.sin(h)
+        forward = c * t.v_north + s * t.v_east
+        starboard = -s * t.v_north + c * t.v_east
+        k = 1.0 + self.dvl_scale
+        ca, sa = math.cos(self.dvl_misalign), math.sin(self.dvl_misalign)
+        fwd_m = k * (ca * forward - sa * starboard) + self.rng.gauss(0.0, self.dvl_sigma)
+        stb_m = k * (sa * forward + ca * starboard) + self.rng.gauss(0.0, self.dvl_sigma)
+        hm = math.radians(self.heading_meas)
+        cm, sm = math.cos(hm), math.sin(hm)
+        return cm * fwd_m - sm * stb_m, sm * fwd_m + cm * stb_m
+
+    def _usbl(self) -> None:
+        t = self.truth
+        sigma = self.usbl_sigma
+        if self.rng.random() < USBL_OUTLIER_RATE:
+            sigma *= 8.0
+        fix = UsblFix(t.time, t.north + self.rng.gauss(0.0, sigma), t.east + self.rng.gauss(0.0, sigma),
+                      used=self.aiding, accepted=False)
+        if self.aiding:
+            fix.accepted = self.filter.update(fix.north, fix.east, self.usbl_sigma).accepted
+        self.log.fixes.append(fix)
+
+    # -- the Vehicle interface -----------------------------------------------------------------------------
+    def observe(self) -> Observation:
+        f = self.filter
+        return Observation(NavState(
+            time=self.truth.time, north=f.north, east=f.east, depth=self.depth_meas, heading=self.heading_meas,
+            speed=self.truth.speed, altitude=self.altitude_meas, position_sigma=f.sigma,
+            energy_wh=self.mission.vehicle.energy_wh - self.energy_used_wh))
+
+    def apply(self, command: Command) -> None:
+        self.command = command
+
+    def set_aiding(self, usbl: bool) -> None:
+        self.aiding = usbl and self.usbl_sigma > 0.0
+
+    def advance(self) -> None:
+        dt = self.control_period
+        cmd, t, v = self.command, self.truth, self.mission.vehicle
+        if cmd.altitude is not None and self.altitude_meas is not None:
+            depth_cmd = self.depth_meas + (self.altitude_meas - cmd.altitude)
+        else:
+            depth_cmd = cmd.depth if cmd.depth is not None else self.depth_meas
+        n0, e0, d0 = t.north, t.east, t.depth
+        kinematics.step(t, cmd.heading, cmd.speed, depth_cmd, self.heading_meas, self.depth_meas, v,
+                        self.scene.current, dt)
+        floor = self.scene.surface.depth_at(t.north, t.east)
+        if t.depth > floor:  # the kinematic model cannot pass through the seabed; count the contact
+            t.depth = floor
+            self.log.seabed_contacts += 1
+        self.distance_m += math.sqrt((t.north - n0) ** 2 + (t.east - e0) ** 2 + (t.depth - d0) ** 2)
+        ratio = t.speed / v.cruise_speed
+        self.energy_used_wh += (v.hotel_power_w + v.propulsion_power_w * ratio * ratio * ratio) * dt / 3600.0
+        self._measure()
+        vn, ve = self._dvl_velocity_world()
+        self.filter.predict(vn, ve, dt)
+        if t.time >= self.next_fix - 1e-9:
+            self.next_fix += self.usbl_period
+            self._usbl()
+        self.record()
+
+    def record(self) -> None:
+        t, f = self.truth, self.filter
+        self.log.rows.append((
+            t.time, t.north, t.east, t.depth, t.heading, self.true_altitude(),
+            f.north, f.east, self.depth_meas, self.heading_meas,
+            self.altitude_meas if self.altitude_meas is not None else math.nan,
+            f.sigma, t.speed, self.energy_used_wh, self.element))
