@@ -18,7 +18,7 @@ from mission.world.terrain import HeightField, generate_seabed
 
 @dataclass(frozen=True)
 class PlacedPart:
-    """One primitive in the world frame: its hull corners, NE footprint and top depth."""
+    """One primitive in the world frame: hull corners (north, east, depth), footprint (x = east, y = north), top."""
 
     part: Part
     corners_world: Array
@@ -92,14 +92,14 @@ def _place(obj: WorldObject, T_world_object: Array) -> PlacedObject:
     parts = []
     for part in obj.parts:
         corners = transform_points(T_world_object, _part_corners(part))
-        hull = MultiPoint([tuple(c) for c in corners[:, :2]]).convex_hull
+        hull = MultiPoint([(c[1], c[0]) for c in corners]).convex_hull  # x = east, y = north
         parts.append(PlacedPart(part, corners, hull, float(corners[:, 2].min())))
     return PlacedObject(obj.id, obj.database, T_world_object, tuple(parts))
 
 
 def _raise_surface(surface: Array, field: HeightField, part: PlacedPart) -> None:
     """Lower the surface depth to the part's top over the grid cells its footprint covers."""
-    n_lo, e_lo, n_hi, e_hi = part.footprint.bounds
+    e_lo, n_lo, e_hi, n_hi = part.footprint.bounds
     i0 = max(int(math.floor((n_lo - field.north0) / field.resolution)), 0)
     j0 = max(int(math.floor((e_lo - field.east0) / field.resolution)), 0)
     i1 = min(int(math.ceil((n_hi - field.north0) / field.resolution)), surface.shape[0] - 1)
@@ -108,7 +108,7 @@ def _raise_surface(surface: Array, field: HeightField, part: PlacedPart) -> None
         return
     nn, ee = np.meshgrid(field.north0 + field.resolution * np.arange(i0, i1 + 1),
                          field.east0 + field.resolution * np.arange(j0, j1 + 1), indexing="ij")
-    inside = shapely.contains_xy(part.footprint.buffer(0.5 * field.resolution), nn, ee)
+    inside = shapely.contains_xy(part.footprint.buffer(0.5 * field.resolution), ee, nn)
     block = surface[i0:i1 + 1, j0:j1 + 1]
     block[inside] = np.minimum(block[inside], part.top_depth)
 

@@ -1,0 +1,62 @@
+"""The reference mission loads into the typed model; the JSON Schema agrees with the loader."""
+
+import json
+
+import jsonschema
+import pytest
+import yaml
+from pydantic import ValidationError
+
+from conftest import MISSIONS
+from mission.language import mission_schema, validate_mission_file
+from mission.language.models import Mission, RouteElement
+
+REFERENCE = MISSIONS / "sps_field_inspection.yaml"
+
+
+def reference_without_plugins() -> Mission:
+    data = yaml.safe_load(REFERENCE.read_text())
+    data.pop("plugins")
+    return Mission.model_validate(data)
+
+
+def test_reference_mission_reports_only_its_missing_plugins():
+    mission, diags = validate_mission_file(REFERENCE)
+    assert mission is None
+    assert [d.message.split(" (")[0] for d in diags] == [
+        "perception plug-in 'stereo-referencing'", "perception plug-in 'stereo-vo'"]
+    assert all("is not installed" in d.message and "installed: none" in d.message for d in diags)
+    assert [(d.line, d.col) for d in diags] == [(32, 16), (33, 13)]
+
+
+def test_reference_mission_values_are_typed_with_units():
+    m = reference_without_plugins()
+    assert m.safety.max_duration == 3 * 3600
+    assert m.safety.energy_reserve == 20.0
+    assert m.route[1].survey is not None and m.route[1].survey.overlap == 20.0
+    assert m.route[2].explore is not None and m.route[2].explore.budget == 900
+    assert [e.kind for e in m.route] == ["transit", "survey", "explore", "inspect", "transit"]
+    assert m.route[-1].transit is not None and m.route[-1].transit.to == "home"
+    assert (m.home.north, m.home.east, m.home.depth) == (0.0, 0.0, 0.0)
+    assert m.object("manifold-1").targets[0].reference == "skid-east"
+
+
+def test_missions_are_immutable():
+    m = reference_without_plugins()
+    with pytest.raises(ValidationError):
+        m.seed = 3  # type: ignore[misc]
+
+
+def test_route_element_needs_exactly_one_kind():
+    with pytest.raises(ValidationError, match="exactly one of"):
+        RouteElement.model_validate({"id": "x"})
+
+
+def test_schema_accepts_the_reference_mission_and_rejects_unknown_keys():
+    schema = mission_schema()
+    json.dumps(schema)
+    data = yaml.safe_load(REFERENCE.read_text())
+    jsonschema.validate(data, schema)
+    data["vehicle"]["cruse_speed"] = 1.0
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate(data, schema)
