@@ -1,8 +1,8 @@
-"""Figures of a run folder, redrawn from its files alone (`auv plot DIR`, or `auv simulate` at the end of a run).
+"""Figures of a run folder, drawn from its files alone (`auv plot DIR`; `auv simulate` draws them at the end).
 
     map.png          seabed, geofence, survey areas and no-go zones, charted and true objects, planned paths,
                      true and estimated tracks, USBL fixes and safety violations, in plan view
-    profile.png      true and estimated depth over the seabed under the vehicle, and altitude, per route element
+    profile.png      true and measured depth over the seabed under the vehicle, and altitude, per element
     navigation.png   horizontal navigation error against the filter's σ, with dead-reckoning spans and fixes
 
 Plan views draw east to the right and north up at equal scale; depth axes grow downwards.
@@ -58,7 +58,7 @@ def plot_run(folder: Path, out_dir: Path | None = None) -> list[Path]:
     return paths
 
 
-# -- reading ---------------------------------------------------------------------------------------------------
+# -- reading -------------------------------------------------------------------------------------------------
 def _load_scene(mission: Mission) -> Scene | None:
     """The run's world made concrete, or None if there is none to draw (no world, or it cannot be read)."""
     if mission.world is None or not Path(mission.world).is_file():
@@ -119,7 +119,7 @@ def _charted_outline(obj: KnownObject) -> np.ndarray:
     return transform_points(T, corners)[:, :2]
 
 
-# -- map -------------------------------------------------------------------------------------------------------
+# -- map -----------------------------------------------------------------------------------------------------
 def _ring(points: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
     """East and north of a closed [[north, east], ...] ring."""
     p = np.asarray(points, dtype=float).reshape(-1, 2)
@@ -130,7 +130,7 @@ def _ring(points: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
 def _draw_seabed(fig: Figure, ax: Axes, scene: Scene) -> None:
     north, east = scene.seabed.grid()
     shaded = ax.contourf(east, north, scene.seabed.depth, levels=24, cmap="Blues", alpha=0.85, zorder=0)
-    ax.contour(east, north, scene.seabed.depth, levels=12, colors="white", linewidths=0.4, alpha=0.6, zorder=0)
+    ax.contour(east, north, scene.seabed.depth, levels=12, colors="white", linewidths=0.4, alpha=0.6)
     bar = fig.colorbar(shaded, ax=ax, shrink=0.8, pad=0.02)
     bar.set_label("seabed depth [m]")
     bar.ax.invert_yaxis()
@@ -157,10 +157,10 @@ def _label(ax: Axes, east: float, north: float, text: str, color: str, dy: float
 def _draw_objects(ax: Axes, mission: Mission, scene: Scene | None) -> None:
     for k, obj in enumerate(mission.objects):
         ne = _charted_outline(obj)
-        ax.plot(ne[:, 1], ne[:, 0], color=DB_COLOR, ls="--", lw=1.2, label="charted object" if k == 0 else None)
+        ax.plot(ne[:, 1], ne[:, 0], color=DB_COLOR, ls="--", lw=1.2, label=None if k else "charted object")
         _label(ax, ne[:, 1].max(), ne[:, 0].max(), f"{obj.id} (charted)", DB_COLOR, 6)
     for k, placed in enumerate(scene.objects if scene is not None else ()):
-        north, east = placed.footprint.exterior.xy  # scene footprints are (x = north, y = east)
+        east, north = placed.footprint.exterior.xy  # scene footprints are (x = east, y = north)
         ax.fill(east, north, facecolor=OBJ_COLOR, edgecolor="black", lw=0.8, alpha=0.8,
                 label="true object" if k == 0 else None)
         _label(ax, max(east), min(north), placed.id, OBJ_COLOR, -12)
@@ -215,7 +215,7 @@ def _map_figure(run: RunData, scene: Scene | None) -> Figure:
     home = run.mission.home
     ax.plot(home.east, home.north, "*", color="gold", mec="black", ms=14, zorder=6, label="home")
     _map_limits(ax, run)
-    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_aspect("equal", adjustable="box")
     ax.set_xlabel("east [m]")
     ax.set_ylabel("north [m]")
     ax.set_title(f"{run.mission.name}: {_status(run)}")
@@ -224,7 +224,7 @@ def _map_figure(run: RunData, scene: Scene | None) -> Figure:
     return fig
 
 
-# -- time series -----------------------------------------------------------------------------------------------
+# -- time series ---------------------------------------------------------------------------------------------
 def _element_bands(axes: Sequence[Axes], run: RunData) -> None:
     """Alternate light bands per route element, labelled with its id at the top of the first axes."""
     for k, (element, t0, t1) in enumerate(_element_spans(run.trajectory["time"], run.elements)):
@@ -249,17 +249,18 @@ def _profile_figure(run: RunData) -> Figure:
     top.plot(t, tr["depth_est"], color=EST_COLOR, lw=1.0, ls="--", label="depth (measured)")
     top.invert_yaxis()
     top.set_ylabel("depth [m]")
-    top.legend(loc="lower left", fontsize=8, framealpha=0.85)
+    top.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
 
     bottom.plot(t, tr["altitude"], color=TRUE_COLOR, lw=1.4, label="altitude (true)")
     est = tr["altitude_est"]
     if np.isfinite(est).any():
         bottom.plot(t, est, color=EST_COLOR, lw=1.0, ls="--", label="altitude (measured)")
-    bottom.axhline(safety.min_altitude, color="red", ls="--", lw=1.0, label=f"min altitude {safety.min_altitude:g} m")
+    bottom.axhline(safety.min_altitude, color="red", ls="--", lw=1.0,
+                   label=f"min altitude {safety.min_altitude:g} m")
     bottom.set_ylim(bottom=0.0)
     bottom.set_ylabel("altitude [m]")
     bottom.set_xlabel("time [s]")
-    bottom.legend(loc="upper right", fontsize=8, framealpha=0.85)
+    bottom.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     _element_bands([top, bottom], run)
     for ax in (top, bottom):
         ax.grid(True, lw=0.3, alpha=0.5)
@@ -274,7 +275,7 @@ def _navigation_figure(run: RunData) -> Figure:
     sigma = tr["position_sigma"]
     fig, ax = plt.subplots(figsize=(11, 4.8), layout="constrained")
     for k, (t0, t1) in enumerate(_dead_reckoning_spans(run, float(t[-1]) if len(t) else 0.0)):
-        ax.axvspan(t0, t1, color=DR_COLOR, alpha=0.5, lw=0, zorder=0, label="dead reckoning" if k == 0 else None)
+        ax.axvspan(t0, t1, color=DR_COLOR, alpha=0.5, lw=0, zorder=0, label=None if k else "dead reckoning")
     ax.fill_between(t, 0.0, sigma, color="tab:blue", alpha=0.15, lw=0)
     ax.plot(t, sigma, color="tab:blue", lw=1.0, label="filter 1σ (per axis)")
     ax.plot(t, 3.0 * sigma, color="tab:blue", lw=1.0, ls="--", label="filter 3σ")
@@ -284,8 +285,8 @@ def _navigation_figure(run: RunData) -> Figure:
         rug = ax.get_xaxis_transform()
         groups = [(fx["used"] > 0) & (fx["accepted"] > 0), (fx["used"] > 0) & (fx["accepted"] <= 0),
                   fx["used"] <= 0]
-        for mask, color, name in zip(groups, ("tab:green", "magenta", "0.6"), ("accepted", "rejected", "unused"),
-                                     strict=True):
+        styles = (("tab:green", "accepted"), ("magenta", "rejected"), ("0.6", "unused: not aiding"))
+        for mask, (color, name) in zip(groups, styles, strict=True):
             if mask.any():
                 ax.vlines(fx["time"][mask], 0.0, 0.05, transform=rug, color=color, lw=1.0,
                           label=f"USBL fix {name}")
@@ -294,6 +295,6 @@ def _navigation_figure(run: RunData) -> Figure:
     ax.set_xlabel("time [s]")
     ax.set_ylabel("horizontal position error [m]")
     ax.grid(True, lw=0.3, alpha=0.5)
-    ax.legend(loc="upper left", fontsize=8, framealpha=0.85)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     fig.suptitle(f"{run.mission.name}: navigation ({_status(run)})")
     return fig
