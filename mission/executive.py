@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 from mission.agents import REGISTRY, Agent, AgentContext, Status
 from mission.agents.transit import TransitAgent
@@ -159,7 +159,7 @@ class Executive:
         safe_depth = min(nav.depth, 0.9 * m.safety.max_depth)
         if nav.altitude is not None and nav.altitude < m.safety.min_altitude + 2.0:
             safe_depth = max(0.0, safe_depth - (m.safety.min_altitude + 2.0 - nav.altitude))
-        navigation = "usbl" if self.usbl_available else "dead-reckoning"
+        navigation: Literal["usbl", "dead-reckoning"] = "usbl" if self.usbl_available else "dead-reckoning"
         legs = [("abort-return", Transit(to=to, depth=safe_depth, navigation=navigation))]
         if policy.surface:
             legs.append(("abort-surface", Transit(to=to, depth=final_depth, navigation=navigation)))

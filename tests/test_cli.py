@@ -6,6 +6,7 @@ import subprocess
 import sys
 
 from conftest import MISSIONS
+
 from mission.cli import main
 from mission.sim.vehicle import TRAJECTORY_COLUMNS
 

@@ -9,10 +9,10 @@ from mission.agents import REGISTRY, Agent, TransitAgent
 from mission.errors import UnsupportedMissionError
 from mission.events import EventLog
 from mission.executive import Executive
+from mission.language.loader import load_world
 from mission.sim.run import check_supported, simulate
 from mission.sim.vehicle import SimulatedVehicle
 from mission.world.scene import build_scene
-from mission.language.loader import load_world
 
 ROUTE = """
   - id: first

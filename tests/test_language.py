@@ -5,9 +5,9 @@ import json
 import jsonschema
 import pytest
 import yaml
+from conftest import MISSIONS
 from pydantic import ValidationError
 
-from conftest import MISSIONS
 from mission.language import mission_schema, validate_mission_file
 from mission.language.models import Mission, RouteElement
 

@@ -1,8 +1,8 @@
 """Every mission in missions/ is validated and simulated."""
 
 import pytest
-
 from conftest import MISSIONS
+
 from mission import load_mission, simulate
 from mission.errors import MissionError, UnsupportedMissionError
 from mission.language import validate_mission_file

@@ -3,8 +3,8 @@
 import math
 
 import numpy as np
-
 from conftest import WORLD
+
 from mission.frames import heading_of
 from mission.language.loader import load_world
 from mission.world.model import Seabed

@@ -6,6 +6,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+from pydantic import BaseModel
+
 from mission.errors import Diagnostic, MissionError, PluginError
 from mission.language.checks import Parts, cross_check
 from mission.language.models import Home, KnownObject, Mission, Plugins, RouteElement, Safety, Sensors
@@ -29,17 +31,21 @@ def _parts(doc: Located) -> Parts:
     """Validate each section on its own, silently, so that cross-checks run on whatever is well-formed."""
     data: dict[str, Any] = doc.data
     parts = Parts()
-    for key, model in (("safety", Safety), ("sensors", Sensors), ("plugins", Plugins), ("home", Home)):
+    sections: tuple[tuple[str, type[BaseModel]], ...] = (
+        ("safety", Safety), ("sensors", Sensors), ("plugins", Plugins), ("home", Home))
+    for key, model in sections:
         if key in data:
             value, _ = validate_as(doc, model, (key,))
             setattr(parts, key, value)
         else:
             setattr(parts, key, model())
-    for key, model, store in (("objects", KnownObject, parts.objects), ("route", RouteElement, parts.route)):
+    lists: tuple[tuple[str, type[BaseModel], list[Any]], ...] = (
+        ("objects", KnownObject, parts.objects), ("route", RouteElement, parts.route))
+    for key, item_model, store in lists:
         items = data.get(key)
         if isinstance(items, list):
             for i in range(len(items)):
-                value, _ = validate_as(doc, model, (key, i))
+                value, _ = validate_as(doc, item_model, (key, i))
                 if value is not None:
                     store.append((i, value))
     return parts

@@ -89,15 +89,17 @@ def _message(error: dict[str, Any]) -> str:
     return msg
 
 
-def diagnostics_from(exc: ValidationError, doc: Located, model: type[BaseModel], base: PathKey = ()) -> list[Diagnostic]:
+def diagnostics_from(exc: ValidationError, doc: Located, model: type[BaseModel],
+                     base: PathKey = ()) -> list[Diagnostic]:
     """Located diagnostics for every error of a validation of `doc.data` at `base` against `model`."""
     data = doc.data
     for part in base:
         data = data[part]
     grouped: dict[PathKey, list[tuple[dict[str, Any], bool, int]]] = {}
-    for err in exc.errors():
+    for raw in exc.errors():
+        err: dict[str, Any] = dict(raw)
         path, tagged, depth = _split_loc(data, tuple(err["loc"]), err["type"])
-        grouped.setdefault(path, []).append((dict(err), tagged, depth))
+        grouped.setdefault(path, []).append((err, tagged, depth))
     out: list[Diagnostic] = []
     for path, errs in grouped.items():
         deepest = max(depth for _, tagged, depth in errs if tagged) if any(t for _, t, _ in errs) else 0

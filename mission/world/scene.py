@@ -61,8 +61,9 @@ def _part_corners(part: Part) -> Array:
     """Corners of the part's hull in the object frame (cylinders as 16-gons)."""
     cx, cy, cz = part.at
     if isinstance(part, Box):
-        l, w, h = part.size
-        local = np.array([[sx * l / 2, sy * w / 2, sz * h / 2] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+        length, w, h = part.size
+        signs = [(sx, sy, sz) for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
+        local = np.array([[sx * length / 2, sy * w / 2, sz * h / 2] for sx, sy, sz in signs])
         c, s = math.cos(math.radians(part.heading)), math.sin(math.radians(part.heading))
         local = local @ np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]).T
         return local + (cx, cy, cz)

@@ -60,7 +60,9 @@ class HeightField:
     def grid(self) -> tuple[Array, Array]:
         """North and east coordinates of the grid rows and columns."""
         rows, cols = self.depth.shape
-        return self.north0 + self.resolution * np.arange(rows), self.east0 + self.resolution * np.arange(cols)
+        north = self.north0 + self.resolution * np.arange(rows, dtype=float)
+        east = self.east0 + self.resolution * np.arange(cols, dtype=float)
+        return north, east
 
 
 def generate_seabed(spec: Seabed) -> HeightField:
