@@ -83,6 +83,20 @@ def _plugins(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench(args: argparse.Namespace) -> int:
+    from mission.bench import BENCHMARKS, run_benchmark
+
+    if args.list or not args.name:
+        print("\n".join(sorted(BENCHMARKS)))
+        return 0
+    record = run_benchmark(args.name, quick=args.quick, out_dir=Path(args.out) if args.out else None)
+    print(json.dumps(record["results"], indent=2))
+    failed = [k for k, c in record["checks"].items() if not c["pass"]]
+    for key, c in record["checks"].items():
+        print(f"{'PASS' if c['pass'] else 'FAIL'}  {key}: {c['value']} (target {c['target']})")
+    return 1 if failed else 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="auv", description="Plan, simulate and execute AUV inspection missions.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -107,6 +121,13 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("plot", help="redraw a run folder's figures from its files")
     p.add_argument("run", help="run folder written by `auv simulate`")
     p.set_defaults(func=_plot)
+
+    p = sub.add_parser("bench", help="run a benchmark and write benchmarks/results/NAME.json")
+    p.add_argument("name", nargs="?", help="benchmark name (see --list)")
+    p.add_argument("--quick", action="store_true", help="a shorter run (under 60 s) that still fills every check")
+    p.add_argument("--list", action="store_true", help="list the benchmarks")
+    p.add_argument("--out", help="results folder (default: benchmarks/results)")
+    p.set_defaults(func=_bench)
 
     p = sub.add_parser("plugins", help="list installed perception plug-ins")
     p.add_argument("--json", action="store_true")

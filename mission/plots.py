@@ -264,7 +264,7 @@ def _profile_figure(run: RunData) -> Figure:
     _element_bands([top, bottom], run)
     for ax in (top, bottom):
         ax.grid(True, lw=0.3, alpha=0.5)
-    fig.suptitle(f"{run.mission.name}: depth and altitude ({_status(run)})")
+    fig.suptitle(f"{run.mission.name}: depth and altitude — {_status(run)}")
     return fig
 
 
@@ -296,5 +296,5 @@ def _navigation_figure(run: RunData) -> Figure:
     ax.set_ylabel("horizontal position error [m]")
     ax.grid(True, lw=0.3, alpha=0.5)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
-    fig.suptitle(f"{run.mission.name}: navigation ({_status(run)})")
+    fig.suptitle(f"{run.mission.name}: navigation — {_status(run)}")
     return fig

@@ -1,0 +1,59 @@
+"""Benchmarks behind `auv bench NAME [--quick]`: each runs its anchors and ours side by side in one process and
+writes `benchmarks/results/NAME.json` with `name`, `quick`, `machine`, `timestamp`, `results` and `checks`
+(one entry per goal the issue states: `{"value", "target", "pass"}`), computed from this run's measurements.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import os
+import platform
+import sys
+from collections.abc import Callable
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+from mission.errors import AuvError
+
+REPO = Path(__file__).resolve().parents[2]
+BENCHMARKS: dict[str, str] = {
+    "simspeed": "mission.bench.simspeed",
+}
+
+BenchFn = Callable[[bool], tuple[dict[str, Any], dict[str, dict[str, Any]]]]
+
+
+def check(value: float, target: str) -> dict[str, Any]:
+    """A check entry: `target` is a comparison such as '>= 720' or '<= 5'."""
+    op, bound = target.split()
+    ok = value >= float(bound) if op == ">=" else value <= float(bound)
+    return {"value": value, "target": target, "pass": bool(ok)}
+
+
+def machine() -> dict[str, Any]:
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {"cpu": cpu, "cores": os.cpu_count(), "python": sys.version.split()[0], "platform": platform.platform()}
+
+
+def run_benchmark(name: str, quick: bool = False, out_dir: Path | None = None) -> dict[str, Any]:
+    """Run one benchmark and write its JSON; returns the record."""
+    if name not in BENCHMARKS:
+        raise AuvError(f"unknown benchmark '{name}' (available: {', '.join(sorted(BENCHMARKS))})")
+    module = importlib.import_module(BENCHMARKS[name])
+    results, checks = module.run(quick)
+    record = {"name": name, "quick": quick, "machine": machine(),
+              "timestamp": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+              "results": results, "checks": checks}
+    out_dir = out_dir or REPO / "benchmarks" / "results"
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / f"{name}.json").write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
+    return record
