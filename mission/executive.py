@@ -103,9 +103,10 @@ class Executive:
             rep.status, rep.reason, rep.end_time = "failed", f"agent failed to start: {exc!r}", nav.time
             self.emit("element_failed", nav.time, element=element_id, kind=kind, reason=rep.reason)
             return rep
-        self.vehicle.set_aiding(self.usbl_available and agent.navigation == "usbl")
+        aided = self.usbl_available and agent.navigation == "usbl"
+        self.vehicle.set_aiding(aided)
         self.emit("element_started", nav.time, element=element_id, kind=kind, timeout_s=timeout,
-                  navigation=agent.navigation, planned_path=rep.planned_path, abort=aborting)
+                  navigation="usbl" if aided else "dead-reckoning", planned_path=rep.planned_path, abort=aborting)
         while True:
             obs = self.vehicle.observe()
             nav = obs.nav

@@ -14,21 +14,16 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-import matplotlib
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.axes import Axes  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-
-from mission.errors import MissionError  # noqa: E402
-from mission.frames import pose_matrix, transform_points  # noqa: E402
-from mission.language.loader import load_world  # noqa: E402
-from mission.language.models import KnownObject, Mission  # noqa: E402
-from mission.runfolder import RunData, read_run_folder  # noqa: E402
-from mission.world.scene import Scene, build_scene  # noqa: E402
+from mission.errors import MissionError
+from mission.frames import pose_matrix, transform_points
+from mission.language.loader import load_world
+from mission.language.models import KnownObject, Mission
+from mission.runfolder import RunData, read_run_folder
+from mission.world.scene import Scene, build_scene
 
 TRUE_COLOR, EST_COLOR, PLAN_COLOR = "black", "tab:orange", "tab:purple"
 DB_COLOR, OBJ_COLOR, FENCE_COLOR, AREA_COLOR = "tab:blue", "saddlebrown", "darkred", "teal"
@@ -49,11 +44,7 @@ def plot_run(folder: Path, out_dir: Path | None = None) -> list[Path]:
     ]
     paths = []
     for name, draw in drawers:
-        fig = draw()
-        try:
-            fig.savefig(out / name, dpi=DPI)
-        finally:
-            plt.close(fig)
+        draw().savefig(out / name, dpi=DPI)  # a bare Figure: no pyplot state, no global backend change
         paths.append(out / name)
     return paths
 
@@ -206,7 +197,8 @@ def _map_limits(ax: Axes, run: RunData) -> None:
 
 
 def _map_figure(run: RunData, scene: Scene | None) -> Figure:
-    fig, ax = plt.subplots(figsize=(10, 8.5), layout="constrained")
+    fig = Figure(figsize=(10, 8.5), layout="constrained")
+    ax = fig.subplots()
     if scene is not None:
         _draw_seabed(fig, ax, scene)
     _draw_areas(ax, run.mission)
@@ -238,10 +230,10 @@ def _element_bands(axes: Sequence[Axes], run: RunData) -> None:
 def _profile_figure(run: RunData) -> Figure:
     tr, safety = run.trajectory, run.mission.safety
     t = tr["time"]
-    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(11, 7), layout="constrained",
-                                      gridspec_kw={"height_ratios": [3, 2]})
+    fig = Figure(figsize=(11, 7), layout="constrained")
+    top, bottom = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2]})
     seabed = tr["depth"] + tr["altitude"]
-    top.plot(t, seabed, color=OBJ_COLOR, lw=1.2, label="seabed under vehicle (depth + altitude)")
+    top.plot(t, seabed, color=OBJ_COLOR, lw=1.2, label="bottom under vehicle (seabed or object top)")
     if len(t):
         floor = np.nanmax(seabed) + 2.0 if np.isfinite(seabed).any() else 1.0
         top.fill_between(t, seabed, floor, color="tan", alpha=0.5, lw=0)
@@ -273,7 +265,8 @@ def _navigation_figure(run: RunData) -> Figure:
     t = tr["time"]
     err = np.hypot(tr["north_est"] - tr["north"], tr["east_est"] - tr["east"])
     sigma = tr["position_sigma"]
-    fig, ax = plt.subplots(figsize=(11, 4.8), layout="constrained")
+    fig = Figure(figsize=(11, 4.8), layout="constrained")
+    ax = fig.subplots()
     for k, (t0, t1) in enumerate(_dead_reckoning_spans(run, float(t[-1]) if len(t) else 0.0)):
         ax.axvspan(t0, t1, color=DR_COLOR, alpha=0.5, lw=0, zorder=0, label=None if k else "dead reckoning")
     ax.fill_between(t, 0.0, sigma, color="tab:blue", alpha=0.15, lw=0)

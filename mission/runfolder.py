@@ -33,6 +33,8 @@ def prepare_run_folder(out: Path, mission: Mission, seed: int) -> None:
     out.mkdir(parents=True, exist_ok=True)
     for stale in ("events.jsonl", "metrics.json", "trajectory.csv", "usbl.csv"):
         (out / stale).unlink(missing_ok=True)
+    for old_plot in (out / "plots").glob("*.png"):
+        old_plot.unlink()
     as_run = mission.model_dump(mode="json")
     as_run["seed"] = seed
     if mission.world is not None:
@@ -99,8 +101,8 @@ def read_run_folder(folder: str | Path) -> RunData:
     for name in ("mission.yaml", "trajectory.csv", "events.jsonl", "metrics.json"):
         if not (folder / name).is_file():
             raise RunFolderError(f"{folder}: not a complete run folder (missing {name})")
-    try:
-        mission = load_mission(folder / "mission.yaml")
+    try:  # a finished run is read as it was: installed plug-ins and the world file no longer matter
+        mission = load_mission(folder / "mission.yaml", environment=False)
     except MissionError as exc:
         raise RunFolderError(f"{folder}/mission.yaml is not a valid mission:\n{exc}") from exc
     traj, text = _read_csv(folder / "trajectory.csv", ("element",))

@@ -11,7 +11,7 @@ import os
 import platform
 import sys
 from collections.abc import Callable
-from datetime import datetime, timezone
+from datetime import UTC, datetime, timezone
 from pathlib import Path
 from typing import Any
 
@@ -51,7 +51,7 @@ def run_benchmark(name: str, quick: bool = False, out_dir: Path | None = None) -
     module = importlib.import_module(BENCHMARKS[name])
     results, checks = module.run(quick)
     record = {"name": name, "quick": quick, "machine": machine(),
-              "timestamp": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+              "timestamp": datetime.now(UTC).isoformat(timespec="seconds"),
               "results": results, "checks": checks}
     out_dir = out_dir or REPO / "benchmarks" / "results"
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -87,8 +87,12 @@ def validate_world_file(path: Path) -> tuple[World | None, list[Diagnostic]]:
     return (world if not diags else None), diags
 
 
-def validate_mission_file(path: str | Path) -> tuple[Mission | None, list[Diagnostic]]:
-    """Validate a mission file completely; (the mission if it is valid, every problem found)."""
+def validate_mission_file(path: str | Path, environment: bool = True) -> tuple[Mission | None, list[Diagnostic]]:
+    """Validate a mission file completely; (the mission if it is valid, every problem found).
+
+    With `environment=False` the checks of this machine (installed plug-ins, the world file) are skipped, as
+    when a finished run's mission is read back.
+    """
     path = Path(path)
     doc = read_yaml(path)
     diags = list(doc.problems) + _mapping_document(doc, "mission")
@@ -100,9 +104,10 @@ def validate_mission_file(path: str | Path) -> tuple[Mission | None, list[Diagno
         mission.safety, mission.sensors, mission.plugins, mission.home,
         list(enumerate(mission.objects)), list(enumerate(mission.route)))
     diags += cross_check(doc, parts)
-    diags += _check_plugins(doc, parts.plugins)
+    if environment:
+        diags += _check_plugins(doc, parts.plugins)
     world = doc.data.get("world")
-    if isinstance(world, str):
+    if isinstance(world, str) and environment:
         world_path = resolve_world_path(path, world)
         if not world_path.is_file():
             diags.append(doc.diagnostic(("world",), f"world file '{world}' not found (looked at {world_path})"))
@@ -111,14 +116,17 @@ def validate_mission_file(path: str | Path) -> tuple[Mission | None, list[Diagno
             diags += world_errs
             if mission is not None:
                 mission = mission.model_copy(update={"world": str(world_path)})
+    elif isinstance(world, str) and mission is not None:
+        world_path = resolve_world_path(path, world)
+        mission = mission.model_copy(update={"world": str(world_path) if world_path.is_file() else None})
     if mission is not None:
         mission._source = str(path)
     return (mission if not diags else None), sorted(set(diags), key=lambda d: (d.file, d.line, d.col, d.message))
 
 
-def load_mission(path: str | Path) -> Mission:
+def load_mission(path: str | Path, environment: bool = True) -> Mission:
     """Load a mission, raising MissionError with every problem if it is not valid."""
-    mission, diags = validate_mission_file(path)
+    mission, diags = validate_mission_file(path, environment)
     if diags or mission is None:
         raise MissionError(diags)
     return mission
