@@ -7,6 +7,7 @@ Every check reports and goes on, so that the designer sees every mistake at once
 from __future__ import annotations
 
 import difflib
+import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
@@ -40,6 +41,7 @@ class Parts:
     home: Home | None = None
     objects: list[tuple[int, KnownObject]] = field(default_factory=list)
     route: list[tuple[int, RouteElement]] = field(default_factory=list)
+    raw_object_ids: set[str] = field(default_factory=set)  # ids of objects, even those that did not validate
 
 
 def _hint(name: str, known: Iterable[str]) -> str:
@@ -47,13 +49,14 @@ def _hint(name: str, known: Iterable[str]) -> str:
     return f"; did you mean '{close[0]}'?" if close else ""
 
 
-def _duplicates(doc: Located, items: Iterable[tuple[PathKey, str]], what: str) -> list[Diagnostic]:
+def _duplicates(doc: Located, items: Iterable[tuple[PathKey, str]], what: str, scope: str = ""
+                ) -> list[Diagnostic]:
     seen: dict[str, PathKey] = {}
     out = []
     for path, ident in items:
         if ident in seen:
             line, _ = doc.where(seen[ident])
-            out.append(doc.diagnostic(path, f"duplicate {what} '{ident}' (first defined on line {line})"))
+            out.append(doc.diagnostic(path, f"duplicate {what} '{ident}'{scope} (first defined on line {line})"))
         else:
             seen[ident] = path
     return out
@@ -62,13 +65,15 @@ def _duplicates(doc: Located, items: Iterable[tuple[PathKey, str]], what: str) -
 def _polygon(doc: Located, path: PathKey, coords: list[tuple[float, float]], what: str
              ) -> tuple[ShapelyPolygon | None, list[Diagnostic]]:
     poly = ShapelyPolygon([(e, n) for n, e in coords])  # x = east, y = north
-    if poly.area <= 0.0:
-        return None, [doc.diagnostic(path, f"{what} has no area (its points are collinear or repeated)")]
     if not poly.is_valid:
         reason = explain_validity(poly)
-        if "Self-intersection" in reason:
-            reason = "it intersects itself" + reason[len("Self-intersection"):].replace("[", " near [east, north] [")
+        found = re.search(r"\[([-\d.eE+]+) ([-\d.eE+]+)\]", reason)
+        if reason.startswith("Self-intersection"):
+            near = f" near (north, east) = ({float(found[2]):.1f}, {float(found[1]):.1f})" if found else ""
+            reason = f"it intersects itself{near}"
         return None, [doc.diagnostic(path, f"{what} is not a valid polygon: {reason}")]
+    if poly.area <= 0.0:
+        return None, [doc.diagnostic(path, f"{what} has no area (its points are collinear or repeated)")]
     return poly, []
 
 
@@ -78,9 +83,9 @@ def _check_objects(doc: Located, parts: Parts) -> list[Diagnostic]:
         base: PathKey = ("objects", i)
         sets = obj.characteristic_points
         out += _duplicates(doc, [(base + ("characteristic_points", j, "id"), s.id) for j, s in enumerate(sets)],
-                           f"point-set id in object '{obj.id}'")
+                           "point-set id", f" in object '{obj.id}'")
         out += _duplicates(doc, [(base + ("targets", k, "id"), t.id) for k, t in enumerate(obj.targets)],
-                           f"target id in object '{obj.id}'")
+                           "target id", f" in object '{obj.id}'")
         for j, pset in enumerate(sets):
             where = base + ("characteristic_points", j, "points")
             pts = np.asarray(pset.points, dtype=float).reshape(-1, 3)
@@ -110,7 +115,9 @@ def _check_route(doc: Located, parts: Parts) -> list[Diagnostic]:
         p = element.params
         if isinstance(p, Inspect) or (element.kind == "explore" and p.object != "detected"):  # type: ignore[union-attr]
             oid = p.object  # type: ignore[union-attr]
-            if oid not in objects:
+            if oid not in objects and oid in parts.raw_object_ids:
+                pass  # the object itself is broken; its own diagnostics say why
+            elif oid not in objects:
                 extra = "" if element.kind == "inspect" else " (or 'detected')"
                 out.append(doc.diagnostic(base + ("object",), f"unknown object '{oid}'{extra}; the database has: "
                                           f"{', '.join(objects) or 'none'}{_hint(oid, objects)}"))

@@ -6,7 +6,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from pydantic import BaseModel
+from pydantic import BaseModel, ValidationError
 
 from mission.errors import Diagnostic, MissionError, PluginError
 from mission.language.checks import Parts, cross_check
@@ -27,6 +27,29 @@ def _mapping_document(doc: Located, what: str) -> list[Diagnostic]:
     return []
 
 
+def _salvage(doc: Located, model: type[BaseModel], base: tuple[str | int, ...]) -> Any:
+    """Validate a section; if some of its keys are bad, validate it again without them (using defaults), so
+    that one mistake does not hide the cross-checks the rest of the section allows. None if even that fails."""
+    value, _ = validate_as(doc, model, base)
+    if value is not None:
+        return value
+    node = doc.data
+    for part in base:
+        node = node[part]
+    if not isinstance(node, dict):
+        return None
+    try:
+        model.model_validate(node)
+    except ValidationError as exc:
+        bad = {e["loc"][0] for e in exc.errors() if e["loc"]}
+    else:  # pragma: no cover - validate_as just failed on the same input
+        return None
+    try:
+        return model.model_validate({k: v for k, v in node.items() if k not in bad})
+    except ValidationError:
+        return None
+
+
 def _parts(doc: Located) -> Parts:
     """Validate each section on its own, silently, so that cross-checks run on whatever is well-formed."""
     data: dict[str, Any] = doc.data
@@ -35,17 +58,19 @@ def _parts(doc: Located) -> Parts:
         ("safety", Safety), ("sensors", Sensors), ("plugins", Plugins), ("home", Home))
     for key, model in sections:
         if key in data:
-            value, _ = validate_as(doc, model, (key,))
-            setattr(parts, key, value)
+            setattr(parts, key, _salvage(doc, model, (key,)))
         else:
             setattr(parts, key, model())
+    raw_objects = data.get("objects")
+    if isinstance(raw_objects, list):
+        parts.raw_object_ids = {str(o["id"]) for o in raw_objects if isinstance(o, dict) and "id" in o}
     lists: tuple[tuple[str, type[BaseModel], list[Any]], ...] = (
         ("objects", KnownObject, parts.objects), ("route", RouteElement, parts.route))
     for key, item_model, store in lists:
         items = data.get(key)
         if isinstance(items, list):
             for i in range(len(items)):
-                value, _ = validate_as(doc, item_model, (key, i))
+                value = _salvage(doc, item_model, (key, i))
                 if value is not None:
                     store.append((i, value))
     return parts

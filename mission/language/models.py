@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
 from mission.language.units import Duration, Percent
 
@@ -23,7 +23,7 @@ NonNegative = Annotated[float, Field(ge=0)]
 
 
 class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class Origin(Strict):
@@ -43,8 +43,8 @@ class Home(Strict):
 
 
 class Vehicle(Strict):
-    cruise_speed: Positive = 1.5
     max_speed: Positive = 2.0
+    cruise_speed: Positive = 1.5
     max_acceleration: Positive = 0.2
     max_yaw_rate: Positive = 15.0
     max_vertical_speed: Positive = 0.5
@@ -53,11 +53,13 @@ class Vehicle(Strict):
     hotel_power_w: NonNegative = 60.0
     propulsion_power_w: NonNegative = 180.0
 
-    @model_validator(mode="after")
-    def _cruise_within_max(self) -> Vehicle:
-        if self.cruise_speed > self.max_speed:
-            raise ValueError(f"cruise_speed {self.cruise_speed} exceeds max_speed {self.max_speed}")
-        return self
+    @field_validator("cruise_speed")
+    @classmethod
+    def _cruise_within_max(cls, value: float, info: ValidationInfo) -> float:
+        top = info.data.get("max_speed")
+        if top is not None and value > top:
+            raise ValueError(f"cruise_speed {value:g} exceeds max_speed {top:g}")
+        return value
 
 
 class Mbes(Strict):

@@ -57,13 +57,15 @@ def _build(doc: Located, node: yaml.Node, path: PathKey) -> Any:
         for key_node, value_node in node.value:
             key = _build(doc, key_node, path + ("<key>",))
             if not isinstance(key, (str, int, float, bool)) or key is None:
-                doc.problems.append(Diagnostic(doc.file, *_position(key_node), "a mapping key must be a scalar"))
+                doc.problems.append(Diagnostic(doc.file, *_position(key_node),
+                                               "a mapping key must be a string or a number"))
                 continue
             key = str(key) if not isinstance(key, str) else key
             if key in out:
+                first = doc.key_at[path + (key,)][0]
                 doc.problems.append(
-                    Diagnostic(doc.file, *_position(key_node), f"duplicate key '{key}'")
-                )
+                    Diagnostic(doc.file, *_position(key_node), f"duplicate key '{key}' (first on line {first})"))
+                continue
             doc.key_at[path + (key,)] = _position(key_node)
             out[key] = _build(doc, value_node, path + (key,))
         doc.value_at.pop(path + ("<key>",), None)
@@ -73,16 +75,34 @@ def _build(doc: Located, node: yaml.Node, path: PathKey) -> Any:
     return _SCALARS.construct_object(node)  # type: ignore[no-untyped-call]
 
 
+def _syntax_diagnostic(exc: yaml.MarkedYAMLError, file: str) -> Diagnostic:
+    """Locate a syntax error where the reader can fix it: an unclosed bracket at the bracket itself."""
+    problem, context = exc.problem or "", exc.context or ""
+    pm, cm = exc.problem_mark, exc.context_mark
+    if "flow" in context and cm is not None:
+        opener = "{" if "mapping" in context else "["
+        where = f" (line {pm.line + 1}, column {pm.column + 1})" if pm is not None else ""
+        return Diagnostic(file, cm.line + 1, cm.column + 1,
+                          f"YAML syntax error: this '{opener}' is never closed: {problem}{where}")
+    message = f"YAML syntax error: {problem}"
+    if context:
+        message += f" ({context})"
+    if "<block end>" in problem or "mapping values are not allowed" in problem:
+        message += "; check the indentation"
+    if "tab" in problem:
+        message += "; indent with spaces, not tabs"
+    mark = pm or cm
+    line, col = (mark.line + 1, mark.column + 1) if mark is not None else (1, 1)
+    return Diagnostic(file, line, col, message)
+
+
 def parse_yaml(text: str, file: str) -> Located:
     """Parse one YAML document; syntax errors become diagnostics, never exceptions."""
     doc = Located(file=file, data=None)
     try:
         node = yaml.compose(text, Loader=yaml.SafeLoader)
     except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
-        message = f"YAML syntax error: {exc.problem or exc.context}"
-        doc.problems.append(Diagnostic(file, line, col, message))
+        doc.problems.append(_syntax_diagnostic(exc, file))
         return doc
     except yaml.YAMLError as exc:
         doc.problems.append(Diagnostic(file, 1, 1, f"YAML error: {exc}"))
@@ -95,7 +115,10 @@ def parse_yaml(text: str, file: str) -> Located:
     except yaml.constructor.ConstructorError as exc:
         mark = exc.problem_mark
         line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
-        doc.problems.append(Diagnostic(file, line, col, f"YAML error: {exc.problem}"))
+        problem = str(exc.problem)
+        if "merge" in problem:
+            problem = "YAML merge keys (<<) are not supported in missions; write the keys out"
+        doc.problems.append(Diagnostic(file, line, col, f"YAML error: {problem}"))
     return doc
 
 

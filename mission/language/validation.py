@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import difflib
+import re
 import types
 import typing
 from typing import Any
@@ -53,27 +54,26 @@ def _model_at(root: type[BaseModel], loc: tuple[Any, ...]) -> type[BaseModel] | 
     return current[0] if current else None
 
 
-def _split_loc(data: Any, loc: tuple[Any, ...], error_type: str) -> tuple[PathKey, bool, int]:
-    """Data path of an error location, whether a union tag was passed, and the depth after the last tag."""
+def _split_loc(data: Any, loc: tuple[Any, ...], error_type: str) -> tuple[PathKey, int | None, int]:
+    """Data path of an error location, where in it the last union tag stood (None: no tag), and the depth
+    reached after that tag (deeper means the branch that matched the value's shape)."""
     path: list[str | int] = []
-    tagged, after_tag = False, 0
+    site: int | None = None
     node = data
     for k, part in enumerate(loc):
         last = k == len(loc) - 1
         if isinstance(node, dict) and isinstance(part, str) and part in node:
             path.append(part)
             node = node[part]
-            after_tag += 1
         elif isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node):
             path.append(part)
             node = node[part]
-            after_tag += 1
         elif last and error_type == "missing":
             path.append(part)
-            after_tag += 1
         else:
-            tagged, after_tag = True, 0
-    return tuple(path), tagged, after_tag
+            site = len(path)
+    depth = len(path) - site if site is not None else 0
+    return tuple(path), site, depth
 
 
 def _message(error: dict[str, Any]) -> str:
@@ -81,6 +81,8 @@ def _message(error: dict[str, Any]) -> str:
     for prefix in ("Value error, ", "Assertion failed, "):
         if msg.startswith(prefix):
             msg = msg[len(prefix):]
+    msg = re.sub(r"a valid dictionary or instance of \w+", "a mapping", msg)
+    msg = msg.replace(" after validation", "")
     msg = msg[:1].lower() + msg[1:]
     if error["type"] not in ("missing", "extra_forbidden", "value_error") and "input" in error:
         value = error["input"]
@@ -89,43 +91,68 @@ def _message(error: dict[str, Any]) -> str:
     return msg
 
 
+def _literal_hint(errors: list[dict[str, Any]]) -> str:
+    for err in errors:
+        if err["type"] == "literal_error" and isinstance(err.get("input"), str):
+            choices = re.findall(r"'([^']*)'", str(err.get("ctx", {}).get("expected", "")))
+            close = difflib.get_close_matches(err["input"], choices, n=1, cutoff=0.6)
+            if close:
+                return f"; did you mean '{close[0]}'?"
+    return ""
+
+
+def _unknown_key(doc: Located, model: type[BaseModel], err: dict[str, Any], full: PathKey) -> Diagnostic:
+    key = str(full[-1])
+    parent = _model_at(model, tuple(err["loc"])[:-1])
+    hint = ""
+    if parent is not None:
+        close = difflib.get_close_matches(key, list(parent.model_fields), n=1, cutoff=0.6)
+        hint = f"; did you mean '{close[0]}'?" if close else f" (allowed: {', '.join(parent.model_fields)})"
+    return doc.diagnostic(full, f"unknown key '{key}' in {dotted(full[:-1])}{hint}", key=True)
+
+
 def diagnostics_from(exc: ValidationError, doc: Located, model: type[BaseModel],
                      base: PathKey = ()) -> list[Diagnostic]:
     """Located diagnostics for every error of a validation of `doc.data` at `base` against `model`."""
     data = doc.data
     for part in base:
         data = data[part]
-    grouped: dict[PathKey, list[tuple[dict[str, Any], bool, int]]] = {}
+    entries = []
     for raw in exc.errors():
         err: dict[str, Any] = dict(raw)
-        path, tagged, depth = _split_loc(data, tuple(err["loc"]), err["type"])
-        grouped.setdefault(path, []).append((err, tagged, depth))
+        path, site, depth = _split_loc(data, tuple(err["loc"]), err["type"])
+        entries.append((err, path, site, depth))
+    # Of a union's branches, keep the one that got furthest into the value (the shape the author meant).
+    best: dict[PathKey, int] = {}
+    for _, path, site, depth in entries:
+        if site is not None:
+            best[path[:site]] = max(best.get(path[:site], 0), depth)
+    grouped: dict[PathKey, list[dict[str, Any]]] = {}
+    for err, path, site, depth in entries:
+        if site is None or depth == best[path[:site]]:
+            grouped.setdefault(path, []).append(err)
     out: list[Diagnostic] = []
+    short: dict[PathKey, int] = {}
     for path, errs in grouped.items():
-        deepest = max(depth for _, tagged, depth in errs if tagged) if any(t for _, t, _ in errs) else 0
-        chosen = [e for e, tagged, depth in errs if not tagged or depth == deepest]
-        if len(chosen) > 1 and all(t for _, t, _ in errs):
-            msgs = sorted({_message(e) for e in chosen})
-            chosen = [{**chosen[0], "msg": " or ".join(msgs), "type": "union"}]
-        for err in chosen:
-            full = base + path
-            where = dotted(full)
+        full = base + path
+        if len(errs) > 1 and all(e["type"] not in ("missing", "extra_forbidden") for e in errs):
+            msgs = sorted({_message(e) for e in errs})
+            out.append(doc.diagnostic(full, f"{dotted(full)}: {' or '.join(msgs)}{_literal_hint(errs)}"))
+            continue
+        for err in errs:
             if err["type"] == "extra_forbidden":
-                key = str(path[-1])
-                parent = _model_at(model, tuple(err["loc"])[:-1])
-                hint = ""
-                if parent is not None:
-                    close = difflib.get_close_matches(key, list(parent.model_fields), n=1, cutoff=0.6)
-                    if close:
-                        hint = f"; did you mean '{close[0]}'?"
-                    else:
-                        hint = f" (allowed: {', '.join(parent.model_fields)})"
-                out.append(doc.diagnostic(full, f"unknown key '{key}' in {dotted(full[:-1])}{hint}", key=True))
+                out.append(_unknown_key(doc, model, err, full))
+            elif err["type"] == "missing" and isinstance(path[-1], int):
+                short[full[:-1]] = max(short.get(full[:-1], 0), path[-1] + 1)
             elif err["type"] == "missing":
                 out.append(doc.diagnostic(full[:-1], f"missing required key '{path[-1]}' in {dotted(full[:-1])}"))
             else:
-                msg = err["msg"] if err["type"] == "union" else _message(err)
-                out.append(doc.diagnostic(full, f"{where}: {msg}"))
+                out.append(doc.diagnostic(full, f"{dotted(full)}: {_message(err)}{_literal_hint([err])}"))
+    for parent, needed in short.items():
+        node = doc.data
+        for part in parent:
+            node = node[part]
+        out.append(doc.diagnostic(parent, f"{dotted(parent)}: expected {needed} values, got {len(node)}"))
     return out
 
 
