@@ -11,7 +11,7 @@ import os
 import platform
 import sys
 from collections.abc import Callable
-from datetime import UTC, datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
