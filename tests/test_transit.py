@@ -142,3 +142,16 @@ def test_an_element_past_its_timeout_fails_and_can_abort_the_mission(write_missi
     assert m["elements"][0]["duration_s"] == pytest.approx(30.0, abs=0.5)
     assert m["elements"][1]["status"] == "skipped"
     assert m["aborted"] and "slow" in m["abort_reason"]
+
+
+def test_a_mission_past_its_max_duration_aborts(write_mission):
+    route = """
+  - id: long
+    transit: {to: {north: 300, east: 400}, depth: 20}
+"""
+    path = write_mission("duration", route)
+    path.write_text(path.read_text().replace("min_altitude: 1.5", "min_altitude: 1.5\n  max_duration: 2min"))
+    m = simulate(load_mission(path), seed=1).metrics
+    assert [v["monitor"] for v in m["safety_violations"]] == ["max_duration"]
+    assert m["safety_violations"][0]["time"] == pytest.approx(120.0, abs=0.5)
+    assert m["aborted"]
