@@ -17,7 +17,7 @@ demo: $(STAMP)
 	$(BIN)/auv simulate missions/field_transit.yaml --out runs/demo
 
 test: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q
+	MPLBACKEND=Agg $(BIN)/python -m pytest
 
 lint: $(STAMP)
 	$(BIN)/ruff check mission planners perception_plugins tests
