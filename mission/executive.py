@@ -13,6 +13,7 @@ from typing import Any, Literal
 
 from mission.agents import REGISTRY, Agent, AgentContext, Status
 from mission.agents.transit import TransitAgent
+from mission.knowledge import Knowledge
 from mission.language.models import Mission, RouteElement, Transit
 from mission.safety import SafetyMonitors, Violation
 from mission.vehicle import Command, NavState, Vehicle
@@ -45,6 +46,7 @@ class ExecutionReport:
     violations: list[dict[str, Any]] = field(default_factory=list)
     start_time: float = 0.0
     end_time: float = 0.0
+    knowledge: Knowledge = field(default_factory=Knowledge)
 
 
 def default_timeout(element: RouteElement, nav: NavState, mission: Mission) -> float:
@@ -97,7 +99,7 @@ class Executive:
         rep = ElementReport(element_id, kind, "running", start_time=nav.time)
         timeout = default_timeout(element, nav, self.mission)
         try:
-            agent.start(AgentContext(self.mission, element, nav, self.emit))
+            agent.start(AgentContext(self.mission, element, nav, self.emit, self.report.knowledge))
             rep.planned_path = [tuple(map(float, p)) for p in agent.planned_path()]  # type: ignore[misc]
         except Exception as exc:  # an agent's fault is the element's failure, never the executive's crash
             rep.status, rep.reason, rep.end_time = "failed", f"agent failed to start: {exc!r}", nav.time
@@ -105,6 +107,7 @@ class Executive:
             return rep
         aided = self.usbl_available and agent.navigation == "usbl"
         self.vehicle.set_aiding(aided)
+        self.vehicle.set_payload(agent.payload)
         self.emit("element_started", nav.time, element=element_id, kind=kind, timeout_s=timeout,
                   navigation="usbl" if aided else "dead-reckoning", planned_path=rep.planned_path, abort=aborting)
         while True:
@@ -136,6 +139,7 @@ class Executive:
             agent.stop()
         except Exception as exc:
             self.emit("agent_fault", nav.time, element=element_id, error=repr(exc))
+        self.vehicle.set_payload(frozenset())
         rep.end_time = nav.time
         rep.details = dict(agent.details)
         event = "element_finished" if rep.status == "succeeded" else "element_failed"

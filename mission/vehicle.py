@@ -1,6 +1,6 @@
 """What the executive and agents exchange with a vehicle: estimated state in, setpoints out.
 
-The simulator is one implementation of `Vehicle`; a real vehicle is an adapter behind the same four calls.
+The simulator is one implementation of `Vehicle`; a real vehicle is an adapter behind the same five calls.
 Nothing here knows the truth.
 """
 
@@ -8,6 +8,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import Protocol
+
+import numpy as np
+from numpy.typing import NDArray
 
 
 @dataclass(frozen=True)
@@ -25,11 +28,32 @@ class NavState:
     energy_wh: float
 
 
+@dataclass(frozen=True, eq=False)
+class SonarPing:
+    """One multibeam ping in the sensor frame, with the navigation estimate at the time it was taken.
+
+    Beam k points at `angles_deg[k]` across track from the vehicle's down axis (positive to starboard) and
+    returned at `ranges[k]` metres when `hit[k]`. The pose is the estimate: agents place pings with it.
+    """
+
+    time: float
+    ranges: NDArray[np.float64]
+    angles_deg: NDArray[np.float64]
+    hit: NDArray[np.bool_]
+    north: float
+    east: float
+    depth: float
+    heading: float
+    position_sigma: float
+
+
 @dataclass(frozen=True)
 class Observation:
-    """Everything an agent may look at on one control tick."""
+    """Everything an agent may look at on one control tick: the estimate and the sensor products since the
+    previous tick (empty when the payload is off)."""
 
     nav: NavState
+    sonar: tuple[SonarPing, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -62,6 +86,10 @@ class Vehicle(Protocol):
 
     def set_aiding(self, usbl: bool) -> None:
         """Use (or ignore) acoustic position fixes in the navigation filter."""
+        ...
+
+    def set_payload(self, sensors: frozenset[str]) -> None:
+        """Switch the named payload sensors on (`mbes`, …) and every other one off."""
         ...
 
     def advance(self) -> None:

@@ -16,6 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+from mission.knowledge import Knowledge
 from mission.language.models import Mission, RouteElement
 from mission.vehicle import Command, NavState, Observation
 
@@ -34,6 +35,7 @@ class AgentContext:
     element: RouteElement
     nav: NavState
     emit: Callable[..., None] = field(default=lambda *a, **k: None)
+    knowledge: Knowledge = field(default_factory=Knowledge)
 
 
 class Agent:
@@ -45,6 +47,7 @@ class Agent:
         self.status: Status = Status.RUNNING
         self.reason: str = ""
         self.navigation: str = "usbl"  # "usbl" or "dead-reckoning": which aiding the agent asks for
+        self.payload: frozenset[str] = frozenset()  # payload sensors the agent needs on (e.g. "mbes")
         self.details: dict[str, Any] = {}  # element results for metrics (agent-specific)
 
     def start(self, context: AgentContext) -> None:

@@ -71,6 +71,7 @@ class SimulatedVehicle:
         self.energy_used_wh = 0.0
         self.distance_m = 0.0
         self.element = ""
+        self.payload: frozenset[str] = frozenset()
         self.log = SimLog()
         self._measure()
 
@@ -126,6 +127,9 @@ class SimulatedVehicle:
 
     def set_aiding(self, usbl: bool) -> None:
         self.aiding = usbl and self.usbl_sigma > 0.0
+
+    def set_payload(self, sensors: frozenset[str]) -> None:
+        self.payload = sensors
 
     def advance(self) -> None:
         dt = self.control_period
