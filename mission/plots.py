@@ -4,6 +4,7 @@
                      true and estimated tracks, USBL fixes and safety violations, in plan view
     profile.png      true and measured depth over the seabed under the vehicle, and altitude, per element
     navigation.png   horizontal navigation error against the filter's σ, with dead-reckoning spans and fixes
+    survey_ID.png    per survey element: sensed depth and passes, information map, detections over the truth
 
 Plan views draw east to the right and north up at equal scale; depth axes grow downwards.
 """
@@ -23,6 +24,7 @@ from mission.frames import pose_matrix, transform_points
 from mission.language.loader import load_world
 from mission.language.models import KnownObject, Mission
 from mission.runfolder import RunData, read_run_folder
+from mission.survey_plots import survey_figure
 from mission.world.scene import Scene, build_scene
 
 TRUE_COLOR, EST_COLOR, PLAN_COLOR = "black", "tab:orange", "tab:purple"
@@ -42,11 +44,20 @@ def plot_run(folder: Path, out_dir: Path | None = None) -> list[Path]:
         ("profile.png", lambda: _profile_figure(run)),
         ("navigation.png", lambda: _navigation_figure(run)),
     ]
+    for element, products in run.maps.items():
+        if "info" in products:
+            drawers.append((f"survey_{element}.png", _survey_drawer(run, element, products, scene)))
     paths = []
     for name, draw in drawers:
         draw().savefig(out / name, dpi=DPI)  # a bare Figure: no pyplot state, no global backend change
         paths.append(out / name)
     return paths
+
+
+def _survey_drawer(run: RunData, element: str, products: dict[str, np.ndarray], scene: Scene | None
+                   ) -> Callable[[], Figure]:
+    item: dict[str, Any] = next((e for e in run.metrics.get("elements", []) if e.get("id") == element), {})
+    return lambda: survey_figure(element, products, item, scene)
 
 
 # -- reading -------------------------------------------------------------------------------------------------

@@ -6,6 +6,7 @@
     DIR/usbl.csv          acoustic fixes: time, north, east, used, accepted
     DIR/events.jsonl      events, flushed as they happened
     DIR/metrics.json      the run's metrics
+    DIR/maps/ELEMENT.npz  maps an element built (survey: depth, info, north0, east0, cell, lines)
     DIR/plots/*.png       figures (`auv plot DIR` redraws them)
 """
 
@@ -23,6 +24,7 @@ import yaml
 
 from mission.errors import MissionError, RunFolderError
 from mission.events import read_events
+from mission.knowledge import Knowledge
 from mission.language.loader import load_mission
 from mission.language.models import Mission
 from mission.sim.vehicle import TRAJECTORY_COLUMNS, SimulatedVehicle
@@ -33,6 +35,8 @@ def prepare_run_folder(out: Path, mission: Mission, seed: int) -> None:
     out.mkdir(parents=True, exist_ok=True)
     for stale in ("events.jsonl", "metrics.json", "trajectory.csv", "usbl.csv"):
         (out / stale).unlink(missing_ok=True)
+    for old_map in (out / "maps").glob("*.npz"):
+        old_map.unlink()
     for old_plot in (out / "plots").glob("*.png"):
         old_plot.unlink()
     as_run = mission.model_dump(mode="json")
@@ -44,7 +48,8 @@ def prepare_run_folder(out: Path, mission: Mission, seed: int) -> None:
     (out / "mission.yaml").write_text(header + yaml.safe_dump(as_run, sort_keys=False), encoding="utf-8")
 
 
-def write_run_results(out: Path, metrics: dict[str, Any], vehicle: SimulatedVehicle) -> None:
+def write_run_results(out: Path, metrics: dict[str, Any], vehicle: SimulatedVehicle,
+                      knowledge: Knowledge | None = None) -> None:
     with (out / "trajectory.csv").open("w", newline="", encoding="utf-8") as f:
         w = csv.writer(f)
         w.writerow(TRAJECTORY_COLUMNS)
@@ -56,6 +61,13 @@ def write_run_results(out: Path, metrics: dict[str, Any], vehicle: SimulatedVehi
         for fix in vehicle.log.fixes:
             w.writerow((f"{fix.time:.2f}", f"{fix.north:.3f}", f"{fix.east:.3f}", int(fix.used), int(fix.accepted)))
     (out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n", encoding="utf-8")
+    if knowledge is not None and knowledge.maps:
+        (out / "maps").mkdir(exist_ok=True)
+        for element, products in knowledge.maps.items():
+            arrays = {k: np.asarray(v) for k, v in products.items() if k != "lines"}
+            lines = np.asarray(products.get("lines", []), dtype=float).reshape(-1, 2, 2)
+            arrays["lines"] = lines
+            np.savez_compressed(out / "maps" / f"{element}.npz", **arrays)  # type: ignore[arg-type]
 
 
 @dataclass
@@ -69,6 +81,7 @@ class RunData:
     fixes: dict[str, np.ndarray]
     events: list[dict[str, Any]]
     metrics: dict[str, Any]
+    maps: dict[str, dict[str, np.ndarray]]
 
 
 def _read_csv(path: Path, text_columns: tuple[str, ...] = ()) -> tuple[dict[str, np.ndarray], dict[str, list[str]]]:
@@ -116,4 +129,12 @@ def read_run_folder(folder: str | Path) -> RunData:
         metrics = json.loads((folder / "metrics.json").read_text(encoding="utf-8"))
     except json.JSONDecodeError as exc:
         raise RunFolderError(f"{folder}/metrics.json: not JSON ({exc})") from exc
-    return RunData(folder, mission, traj, text["element"], fixes, read_events(folder / "events.jsonl"), metrics)
+    maps: dict[str, dict[str, np.ndarray]] = {}
+    for path in sorted((folder / "maps").glob("*.npz")):
+        try:
+            with np.load(path) as data:
+                maps[path.stem] = {k: data[k] for k in data.files}
+        except (OSError, ValueError) as exc:
+            raise RunFolderError(f"{path}: not a map archive ({exc})") from exc
+    return RunData(folder, mission, traj, text["element"], fixes, read_events(folder / "events.jsonl"), metrics,
+                   maps)

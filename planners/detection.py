@@ -30,6 +30,7 @@ class Detection:
     width: float
     heading_deg: float
     height: float
+    top_depth: float
     score: float
     cells: int
 
@@ -55,13 +56,15 @@ def _footprint(north: Array, east: Array, cell: float) -> tuple[float, float, fl
 
 
 def detect_anomalies(depth: Array, north0: float, east0: float, cell: float, info: Array, *,
-                     info_threshold: float | None = None, min_height: float = 0.5, min_area_m2: float = 1.0,
+                     info_threshold: float | None = None, min_height: float = 0.5,
+                     footprint_height: float | None = None, min_area_m2: float = 1.0,
                      background_window_m: float = 25.0) -> list[Detection]:
     """Anomalies of a sensed-depth map (`depth[i, j]` at north0 + i·cell, east0 + j·cell; NaN = unseen).
 
-    A cell is anomalous when it stands at least `min_height` above the local seabed and lies where the
-    information map exceeds `info_threshold` (default: a robust 8-MAD level above the median of observed cells,
-    with a floor of 0.1 m/m). Components smaller than `min_area_m2` are dropped as noise.
+    Cells standing at least `footprint_height` (default: half of `min_height`) above the local seabed form
+    components; a component is an object when its highest cell stands at least `min_height` above the seabed
+    and it touches cells where the information map exceeds `info_threshold` (default: a robust 8-MAD level above
+    the median of observed cells, with a floor of 0.2 m/m). Components smaller than `min_area_m2` are noise.
     """
     depth = np.asarray(depth, dtype=float)
     known = np.isfinite(depth)
@@ -73,22 +76,25 @@ def detect_anomalies(depth: Array, north0: float, east0: float, cell: float, inf
     if info_threshold is None:
         median = float(np.median(observed))
         mad = float(np.median(np.abs(observed - median))) * 1.4826
-        info_threshold = max(median + 8.0 * mad, 0.1)
-    raised = known & (relief >= min_height)
+        info_threshold = max(median + 8.0 * mad, 0.2)
+    footprint_height = 0.5 * min_height if footprint_height is None else footprint_height
+    raised = known & (relief >= footprint_height)
     salient = ndimage.binary_dilation(info > info_threshold, iterations=2)
     # Keep raised components that touch an informative edge; the whole raised body gives the footprint.
     labels, count = ndimage.label(raised, structure=np.ones((3, 3)))
     out = []
     for k in range(1, count + 1):
         mask = labels == k
-        if not (mask & salient).any() or mask.sum() * cell * cell < min_area_m2:
+        if not (mask & salient).any() or mask.sum() * cell * cell < min_area_m2 or relief[mask].max() < min_height:
             continue
         ii, jj = np.nonzero(mask)
-        north, east = north0 + ii * cell, east0 + jj * cell
+        north = np.asarray(north0 + ii * cell, dtype=np.float64)
+        east = np.asarray(east0 + jj * cell, dtype=np.float64)
         weights = relief[mask]
         length, width, heading = _footprint(north, east, cell)
         out.append(Detection(
             north=float(np.average(north, weights=weights)), east=float(np.average(east, weights=weights)),
             length=length, width=width, heading_deg=heading, height=float(relief[mask].max()),
+            top_depth=float(depth[mask].min()),
             score=float(info[mask].max()), cells=int(mask.sum())))
     return sorted(out, key=lambda d: -d.height)

@@ -44,16 +44,16 @@ def test_simulate_refuses_unsupported_kinds_in_one_line(write_mission, tmp_path,
   - id: go
     transit: {to: {north: 30, east: 30}, depth: 10}
   - id: look
-    survey: {area: [[0, 0], [0, 100], [100, 100], [100, 0]], altitude: 20}
+    explore: {object: detected, sensor: scanner}
 """
     path = write_mission("unsupported", route)
     path.write_text(path.read_text().replace("usbl: {sigma: 1.5, rate_hz: 0.5}",
-                                             "usbl: {sigma: 1.5, rate_hz: 0.5}\n  mbes: {beams: 64}"))
+                                             "usbl: {sigma: 1.5, rate_hz: 0.5}\n  scanner: {max_range: 10}"))
     assert main(["validate", str(path)]) == 0
     code = main(["simulate", str(path), "--out", str(tmp_path / "run")])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 1
-    assert len(err) == 1 and "survey" in err[0] and "look" in err[0] and "Traceback" not in err[0]
+    assert len(err) == 1 and "explore" in err[0] and "look" in err[0] and "Traceback" not in err[0]
     assert not (tmp_path / "run").exists()
 
 

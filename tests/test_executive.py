@@ -89,11 +89,11 @@ def test_simulate_writes_events_while_running(write_mission, tmp_path, monkeypat
 def test_unsupported_kinds_are_refused_before_anything_starts(write_mission):
     route = ROUTE + """
   - id: look
-    survey: {area: [[0, 0], [0, 100], [100, 100], [100, 0]], altitude: 20}
+    explore: {object: detected, sensor: scanner}
 """
     path = write_mission("unsupported", route, "sensors_dummy: 1\n")
     path.write_text(path.read_text().replace("sensors_dummy: 1\n", "").replace(
-        "usbl: {sigma: 1.5, rate_hz: 0.5}", "usbl: {sigma: 1.5, rate_hz: 0.5}\n  mbes: {beams: 64}"))
+        "usbl: {sigma: 1.5, rate_hz: 0.5}", "usbl: {sigma: 1.5, rate_hz: 0.5}\n  scanner: {max_range: 10}"))
     mission = load_mission(path)
-    with pytest.raises(UnsupportedMissionError, match=r"survey .*look \(survey\)"):
+    with pytest.raises(UnsupportedMissionError, match=r"explore .*look \(explore\)"):
         check_supported(mission)

@@ -56,4 +56,5 @@ def test_reference_mission_is_refused_for_its_unsupported_kinds_only():
     with pytest.raises(UnsupportedMissionError) as err:
         check_supported(mission)
     message = str(err.value)
-    assert "explore, inspect, survey" in message and "\n" not in message
+    assert "explore, inspect" in message and "survey" not in message.split("(used by")[0]
+    assert "\n" not in message

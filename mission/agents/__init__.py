@@ -1,16 +1,18 @@
-"""Tactical agents by route-element kind. Later issues register `survey`, `explore` and `inspect` here."""
+"""Tactical agents by route-element kind. Later issues register `explore` and `inspect` here."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
 
 from mission.agents.base import Agent, AgentContext, Status
+from mission.agents.survey import SurveyAgent
 from mission.agents.transit import TransitAgent
 
 AgentFactory = Callable[[], Agent]
 
 REGISTRY: dict[str, AgentFactory] = {
     "transit": TransitAgent,
+    "survey": SurveyAgent,
 }
 
 
@@ -22,4 +24,5 @@ def create_agent(kind: str) -> Agent:
     return REGISTRY[kind]()
 
 
-__all__ = ["Agent", "AgentContext", "REGISTRY", "Status", "TransitAgent", "create_agent", "supported_kinds"]
+__all__ = ["Agent", "AgentContext", "REGISTRY", "Status", "SurveyAgent", "TransitAgent", "create_agent",
+           "supported_kinds"]

@@ -20,6 +20,9 @@ from mission.errors import AuvError
 REPO = Path(__file__).resolve().parents[2]
 BENCHMARKS: dict[str, str] = {
     "simspeed": "mission.bench.simspeed",
+    "sonar": "mission.bench.sonar",
+    "mapping": "mission.bench.mapping",
+    "coverage": "mission.bench.coverage",
 }
 
 BenchFn = Callable[[bool], tuple[dict[str, Any], dict[str, dict[str, Any]]]]

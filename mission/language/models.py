@@ -195,6 +195,7 @@ class Survey(Strict):
     pattern: Literal["meander"] = "meander"
     heading: float | Literal["auto"] = "auto"
     speed: Positive | None = None
+    resolution: Annotated[float, Field(gt=0, le=5)] = 0.5  # voxel size of the occupancy map (m)
 
 
 class Weights(Strict):

@@ -6,14 +6,48 @@ import math
 from typing import Any
 
 import numpy as np
+from shapely.geometry import Polygon
 
-from mission.executive import ExecutionReport
+from mission.executive import ElementReport, ExecutionReport
+from mission.language.models import Mission
 from mission.sim.vehicle import SimulatedVehicle
+from mission.world.scene import Scene
+
+DETECTION_RADIUS_M = 5.0  # a detection this close to a true object's centre is that object
+MIN_OBJECT_HEIGHT_M = 1.0  # true objects at least this tall in the area must be detected
 
 
-def _element_metrics(report: ExecutionReport, times: np.ndarray, north: np.ndarray, east: np.ndarray
-                     ) -> list[dict[str, Any]]:
+def _survey_truth(item: dict[str, Any], rep: ElementReport, mission: Mission, scene: Scene) -> None:
+    """Score a survey's detections against the true objects: position errors, false alarms, missed objects."""
+    element = next((e for e in mission.route if e.id == rep.id), None)
+    if element is None or element.survey is None:
+        return
+    p = element.survey
+    area = Polygon([(e, n) for n, e in p.area])
+    for zone in p.exclude:
+        area = area.difference(Polygon([(e, n) for n, e in zone]))
+    truth = []
+    for obj in scene.objects:
+        c = obj.footprint.centroid
+        seabed = scene.seabed.depth_at(c.y, c.x)
+        truth.append((obj.id, c.y, c.x, seabed - obj.top_depth, area.contains(c)))
+    found = set()
+    for det in item.get("detections", []):
+        best = min(truth, key=lambda t: math.hypot(t[1] - det["north"], t[2] - det["east"]), default=None)
+        if best is not None:
+            err = math.hypot(best[1] - det["north"], best[2] - det["east"])
+            det["true_object"] = best[0] if err <= DETECTION_RADIUS_M else None
+            det["position_error_m"] = round(err, 3) if err <= DETECTION_RADIUS_M else None
+            if err <= DETECTION_RADIUS_M:
+                found.add(best[0])
+    item["false_alarms"] = sum(1 for d in item.get("detections", []) if d.get("true_object") is None)
+    item["missed"] = [t[0] for t in truth if t[4] and t[3] >= MIN_OBJECT_HEIGHT_M and t[0] not in found]
+
+
+def _element_metrics(report: ExecutionReport, times: np.ndarray, north: np.ndarray, east: np.ndarray,
+                     mission: Mission, scene: Scene) -> list[dict[str, Any]]:
     out = []
+    step = np.hypot(np.diff(north, prepend=north[:1]), np.diff(east, prepend=east[:1])) if len(north) else north
     for rep in report.elements:
         item: dict[str, Any] = {"id": rep.id, "kind": rep.kind, "status": rep.status,
                                 "duration_s": round(rep.duration_s, 2)}
@@ -24,12 +58,17 @@ def _element_metrics(report: ExecutionReport, times: np.ndarray, north: np.ndarr
             goal = rep.planned_path[-1]
             item["goal"] = [round(goal[0], 3), round(goal[1], 3)]
             item["end_position_error_m"] = round(math.hypot(north[k] - goal[0], east[k] - goal[1]), 3)
+        if math.isfinite(rep.end_time) and len(times):
+            window = (times > rep.start_time) & (times <= rep.end_time)
+            item["path_length_m"] = round(float(step[window].sum()), 2)
         item.update(rep.details)
+        if rep.kind == "survey":
+            _survey_truth(item, rep, mission, scene)
         out.append(item)
     return out
 
 
-def run_metrics(mission_name: str, seed: int, report: ExecutionReport, vehicle: SimulatedVehicle,
+def run_metrics(mission_name: str, seed: int, report: ExecutionReport, vehicle: SimulatedVehicle, scene: Scene,
                 wall_time_s: float) -> dict[str, Any]:
     """The `metrics.json` of a run (see the output contract in the README)."""
     rows = vehicle.log.rows
@@ -51,7 +90,7 @@ def run_metrics(mission_name: str, seed: int, report: ExecutionReport, vehicle: 
         "distance_m": round(vehicle.distance_m, 2),
         "energy_wh": round(vehicle.energy_used_wh, 2),
         "energy_remaining_percent": round(100.0 * (1.0 - vehicle.energy_used_wh / capacity), 2),
-        "elements": _element_metrics(report, times, north, east),
+        "elements": _element_metrics(report, times, north, east, vehicle.mission, scene),
         "safety_violations": report.violations,
         "seabed_contacts": vehicle.log.seabed_contacts,
         "navigation": {

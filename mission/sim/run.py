@@ -75,11 +75,11 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
         if bar is not None:
             bar.close()
     wall = time.perf_counter() - wall0
-    metrics = run_metrics(mission.name, seed, report, vehicle, wall)
+    metrics = run_metrics(mission.name, seed, report, vehicle, scene, wall)
     if out_dir is not None:
         from mission.runfolder import write_run_results
 
-        write_run_results(out_dir, metrics, vehicle)
+        write_run_results(out_dir, metrics, vehicle, report.knowledge)
         if plots:
             from mission.plots import plot_run
 

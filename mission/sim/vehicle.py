@@ -8,12 +8,15 @@ from __future__ import annotations
 import math
 import random
 from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
 
 from mission.language.models import Mission
 from mission.navigation import NavigationFilter
 from mission.sim import kinematics
 from mission.sim.kinematics import TrueState
-from mission.vehicle import Command, NavState, Observation
+from mission.vehicle import Command, NavState, Observation, SonarPing
 from mission.world.scene import Scene
 
 HEADING_SIGMA_DEG = 0.3
@@ -42,6 +45,7 @@ class SimLog:
     rows: list[tuple[object, ...]] = field(default_factory=list)
     fixes: list[UsblFix] = field(default_factory=list)
     seabed_contacts: int = 0
+    pings: int = 0
 
 
 class SimulatedVehicle:
@@ -72,6 +76,9 @@ class SimulatedVehicle:
         self.distance_m = 0.0
         self.element = ""
         self.payload: frozenset[str] = frozenset()
+        self.mbes: Any = None
+        self.next_ping = 0.0
+        self.pending_pings: list[SonarPing] = []
         self.log = SimLog()
         self._measure()
 
@@ -115,12 +122,26 @@ class SimulatedVehicle:
         self.log.fixes.append(fix)
 
     # -- the Vehicle interface -----------------------------------------------------------------------------
+    def _ping(self) -> None:
+        """Multibeam pings due by now: cast from the true pose, tagged with the estimated pose."""
+        period = 1.0 / self.mbes.effective_rate_hz
+        t, f = self.truth, self.filter
+        while self.next_ping <= t.time + 1e-9:
+            ping = self.mbes.ping(t.north, t.east, t.depth, t.heading)
+            ranges = np.where(ping.hit, ping.ranges, self.mbes.max_range)  # no return: free out to max range
+            self.pending_pings.append(SonarPing(
+                time=t.time, ranges=ranges, angles_deg=ping.angles_deg, hit=ping.hit, north=f.north,
+                east=f.east, depth=self.depth_meas, heading=self.heading_meas, position_sigma=f.sigma))
+            self.log.pings += 1
+            self.next_ping += period
+
     def observe(self) -> Observation:
         f = self.filter
+        pings, self.pending_pings = tuple(self.pending_pings), []
         return Observation(NavState(
             time=self.truth.time, north=f.north, east=f.east, depth=self.depth_meas, heading=self.heading_meas,
             speed=self.truth.speed, altitude=self.altitude_meas, position_sigma=f.sigma,
-            energy_wh=self.mission.vehicle.energy_wh - self.energy_used_wh))
+            energy_wh=self.mission.vehicle.energy_wh - self.energy_used_wh), sonar=pings)
 
     def apply(self, command: Command) -> None:
         self.command = command
@@ -130,6 +151,13 @@ class SimulatedVehicle:
 
     def set_payload(self, sensors: frozenset[str]) -> None:
         self.payload = sensors
+        if "mbes" in sensors and self.mbes is None and self.mission.sensors.mbes is not None:
+            from mission.sim.mbes import Multibeam
+            from mission.sim.mjworld import mjworld_for
+
+            world = mjworld_for(self.scene)
+            self.mbes = Multibeam.from_settings(world, self.mission.sensors.mbes, seed=self.rng.randrange(2**31))
+            self.next_ping = self.truth.time
 
     def advance(self) -> None:
         dt = self.control_period
@@ -154,6 +182,8 @@ class SimulatedVehicle:
         if t.time >= self.next_fix - 1e-9:
             self.next_fix += self.usbl_period
             self._usbl()
+        if self.mbes is not None and "mbes" in self.payload:
+            self._ping()
         self.record()
 
     def record(self) -> None:

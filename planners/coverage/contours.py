@@ -1,0 +1,119 @@
+"""Contour passes round the no-go zones (seed 002 §2.1: the whole area outside the forbidden zones is covered).
+
+Survey lines stop a standoff short of a zone, to leave room for the turn, and meet its slanted sides in steps;
+the strip they leave is covered by passes that follow the zone at the standoff, on a ring whose corners the
+vehicle can fly (the zone grown by the standoff, its concave corners rounded to the turning radius). Only the
+stretches of ring next to uncovered free area are flown, the most useful first, until what stays uncovered is
+within the tolerance.
+"""
+
+from __future__ import annotations
+
+import heapq
+
+import numpy as np
+import shapely
+from numpy.typing import NDArray
+from shapely.geometry.base import BaseGeometry
+
+from .runs import Run, polyline_run
+from .scene import QUAD, Scene
+
+Array = NDArray[np.float64]
+
+
+def contour_rings(scene: Scene, spacing: float) -> list[Array]:
+    """Closed rings (first point repeated at the end) round the zones, points at most spacing/4 apart."""
+    if not scene.has_zones:
+        return []
+    grown = scene.zones.buffer(scene.standoff, quad_segs=QUAD)
+    if scene.radius > 0.0:
+        grown = grown.buffer(scene.radius, quad_segs=QUAD).buffer(-scene.radius, quad_segs=QUAD)
+    rings = []
+    for poly in shapely.get_parts(grown):
+        if poly.geom_type != "Polygon":
+            continue
+        for ring in [poly.exterior, *poly.interiors]:
+            rings.append(np.asarray(shapely.segmentize(ring, spacing / 4.0).coords))
+    return rings
+
+
+def _stretches(need: NDArray[np.bool_], ring: Array, bridge: float) -> list[Array]:
+    """Stretches of a closed ring around the points that need it; gaps shorter than `bridge` are flown too."""
+    pts = ring[:-1]
+    n = len(pts)
+    if not need.any():
+        return []
+    seg = np.linalg.norm(np.diff(ring, axis=0), axis=1)          # seg[k]: pts[k] → pts[k+1]
+    gaps = []                                                    # (first free index, length in points, metres)
+    k0 = int(np.flatnonzero(need)[0])
+    k = k0
+    while True:                                                  # walk once round from a needed point
+        k1 = (k + 1) % n
+        if not need[k1]:
+            j = k1
+            run = 0
+            metres = seg[k]
+            while not need[j]:
+                metres += seg[j]
+                run += 1
+                j = (j + 1) % n
+            gaps.append((k1, run, metres))
+            k = j
+        else:
+            k = k1
+        if k == k0:
+            break
+    gaps = [g for g in gaps if g[2] > bridge]
+    if not gaps:
+        return [ring.copy()]
+    out = []
+    for i, (start, run, _) in enumerate(gaps):
+        first = (start + run) % n                                # first needed point after this gap
+        end_start = gaps[(i + 1) % len(gaps)][0]                 # first free point of the next gap
+        idx = [(first - 1) % n]                                  # one point of margin on each side
+        j = first
+        while j != end_start:
+            idx.append(j)
+            j = (j + 1) % n
+        idx.append(end_start)
+        out.append(pts[idx])
+    return out
+
+
+def contour_runs(scene: Scene, residual: BaseGeometry, spacing: float, tolerance: float) -> list[Run]:
+    """Contour passes needed so that at most `tolerance` (a fraction of the free area) of `residual`, the free
+    area the lines leave uncovered, stays uncovered."""
+    if not scene.has_zones:
+        return []
+    budget = tolerance * scene.free.area
+    if residual.area <= budget:
+        return []
+    reach = 0.45 * scene.swath
+    arcs: list[Array] = []
+    covers: list[BaseGeometry] = []
+    for ring in contour_rings(scene, spacing):
+        need = np.asarray(shapely.distance(shapely.points(ring[:-1]), residual) <= reach)
+        for arc in _stretches(need, ring, bridge=max(2.0 * scene.standoff, spacing)):
+            if len(arc) < 2:
+                continue
+            arcs.append(arc)
+            covers.append(shapely.buffer(shapely.linestrings(arc), scene.swath / 2.0, cap_style="flat"))
+    # greedy set cover, lazily: a pass's gain only shrinks as others are chosen
+    gains = [residual.intersection(c).area for c in covers]
+    heap = [(-g, k) for k, g in enumerate(gains) if g > 0.0]
+    heapq.heapify(heap)
+    runs = []
+    left = residual
+    while heap and left.area > budget:
+        _, k = heapq.heappop(heap)
+        gain = left.intersection(covers[k]).area
+        if heap and gain < -heap[0][0] - 1e-9:
+            if gain > 0.0:
+                heapq.heappush(heap, (-gain, k))
+            continue
+        if gain <= 0.0:
+            break
+        runs.append(polyline_run(arcs[k]))
+        left = left.difference(covers[k])
+    return runs
