@@ -39,7 +39,8 @@ def survey_figure(element: str, products: dict[str, np.ndarray], metrics: dict[s
     fig.colorbar(im, ax=height_ax, shrink=0.8, label="sensed depth [m]")
     for line in products.get("lines", np.zeros((0, 2, 2))):
         height_ax.plot(line[:, 1], line[:, 0], color="white", lw=0.8)
-    height_ax.set_title(f"{element}: sensed depth and survey passes (coverage {metrics.get('coverage_percent', 0):.1f}%)")
+    coverage = metrics.get("coverage_percent", 0.0)
+    height_ax.set_title(f"{element}: sensed depth and survey passes (coverage {coverage:.1f}%)")
     info = products["info"]
     im = info_ax.imshow(info, origin="lower", extent=extent, cmap="magma")
     fig.colorbar(im, ax=info_ax, shrink=0.8, label="information I = B * G [m/m]")

@@ -73,8 +73,8 @@ class SurveyAgent(Agent):
         self.params, self.context = p, context
         self.payload = frozenset({"mbes"})
         self.spacing = line_spacing(p.altitude, mbes.swath_deg, p.overlap)
-        self.plan = meander(p.area, p.exclude, spacing=self.spacing, heading=p.heading, turn_radius=m.vehicle.turn_radius,
-                            start=(nav.north, nav.east))
+        self.plan = meander(p.area, p.exclude, spacing=self.spacing, heading=p.heading,
+                            turn_radius=m.vehicle.turn_radius, start=(nav.north, nav.east))
         self.follower = PathFollower((nav.north, nav.east), self.plan.waypoints,
                                      lookahead=max(2.0 * m.vehicle.turn_radius, 8.0),
                                      acceptance=max(0.5 * m.vehicle.turn_radius, 2.0))

@@ -67,7 +67,7 @@ def test_planted_objects_are_detected_with_their_position_size_and_height():
     info = information_map(depth, cell, nav_sigma_m=0.5)
     found = detect_anomalies(depth, 0.0, 0.0, cell, info)
     assert len(found) == len(truth)  # no false alarm on the rough, sloping seabed
-    for north, east, length, width, height, heading in truth:
+    for north, east, length, width, height, _heading in truth:
         d = min(found, key=lambda f: math.hypot(f.north - north, f.east - east))
         assert math.hypot(d.north - north, d.east - east) < 0.5
         assert d.length == pytest.approx(length, abs=1.0) and d.width == pytest.approx(width, abs=1.0)
