@@ -38,6 +38,13 @@ def test_mission_validates_and_simulates(path, tmp_path):
     for name in ("mission.yaml", "world.yaml", "trajectory.csv", "events.jsonl", "metrics.json",
                  "plots/map.png", "plots/profile.png", "plots/navigation.png"):
         assert (tmp_path / "run" / name).is_file(), name
+    # Surveys of the reference world find every object >= 1 m tall within 2 m, with no false alarm.
+    for element in m["elements"]:
+        if element["kind"] == "survey":
+            assert element["missed"] == [] and element["false_alarms"] == 0
+            assert all(d["position_error_m"] <= 2.0 for d in element["detections"])
+            assert element["coverage_percent"] >= 99.0
+            assert (tmp_path / "run" / "plots" / f"survey_{element['id']}.png").is_file()
     # The mission as run is itself a valid mission with the same route.
     again = load_mission(tmp_path / "run" / "mission.yaml")
     assert [e.id for e in again.route] == [e.id for e in mission.route]

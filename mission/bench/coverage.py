@@ -151,7 +151,7 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
 
 
 def run(quick: bool) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:
-    n = 15 if quick else 60
+    n = 15 if quick else 100
     rows = [run_case(random_case(seed)) for seed in range(n)]
     split = [r for r in rows if r["zones_split_lines"]]
     coverage = min(r["ours"]["coverage_percent"] for r in rows)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections import defaultdict
 
-from .joins import Joiner
+from .joins import Join, Joiner
 from .runs import Run
 from .sweep import Sweep
 
@@ -81,8 +81,11 @@ def cell_variants(joiner: Joiner, chains: list[list[int]]) -> list[list[Run]]:
     return tasks
 
 
-def _variants(joiner: Joiner, cell: list[int], starts: set[int], table: dict) -> list[Run]:
+def _variants(joiner: Joiner, cell: list[int], starts: set[int],
+              table: dict[tuple[int, int, int], Join | None]) -> list[Run]:
     out = []
+    if len(cell) == 1:                     # one line: the other start side is the same line flown backwards
+        starts = {max(starts)}
     for d0 in sorted(starts, reverse=True):
         run = joiner.meander(cell, d0, table)
         out.extend([run, run.reversed()])

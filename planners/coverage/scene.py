@@ -131,7 +131,7 @@ class Scene:
             return length
         routed = self.router.lengths(p, q)
         direct = np.linalg.norm(p[:, None, :] - q[None, :, :], axis=2)
-        return np.where(routed <= direct + 1e-9, length, routed + (length - direct))
+        return _penalise_unrouted(np.where(routed <= direct + 1e-9, length, routed + (length - direct)), length)
 
     def pair_costs(self, p: Array, angle_p: Array, q: Array, angle_q: Array) -> Array:
         """`transit_costs` for the pairs (p[i], q[i])."""
@@ -142,4 +142,10 @@ class Scene:
             return length
         routed = self.router.pair_lengths(p, q)
         direct = np.linalg.norm(p - q, axis=1)
-        return np.where(routed <= direct + 1e-9, length, routed + (length - direct))
+        return _penalise_unrouted(np.where(routed <= direct + 1e-9, length, routed + (length - direct)), length)
+
+
+def _penalise_unrouted(cost: Array, length: Array) -> Array:
+    """Where no route round the zones exists (a point shut in by zones), a large finite cost keeps orderings
+    well defined; the transit itself then falls back to the straight way."""
+    return np.where(np.isfinite(cost), cost, 10.0 * length + 1e6)
