@@ -13,8 +13,8 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/auv validate missions/field_transit.yaml
-	$(BIN)/auv simulate missions/field_transit.yaml --out runs/demo
+	$(BIN)/auv validate missions/field_survey.yaml
+	$(BIN)/auv simulate missions/field_survey.yaml --out runs/demo
 
 test: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m pytest
