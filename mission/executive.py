@@ -15,6 +15,7 @@ from mission.agents import REGISTRY, Agent, AgentContext, Status
 from mission.agents.transit import TransitAgent
 from mission.knowledge import Knowledge
 from mission.language.models import Mission, RouteElement, Transit
+from mission.plugin_host import PluginHost
 from mission.safety import SafetyMonitors, Violation
 from mission.vehicle import Command, NavState, Vehicle
 
@@ -70,7 +71,7 @@ class Executive:
 
     def __init__(self, mission: Mission, vehicle: Vehicle, emit: Callable[..., None],
                  agents: Mapping[str, Callable[[], Agent]] | None = None,
-                 on_tick: Callable[[NavState], None] | None = None):
+                 on_tick: Callable[[NavState], None] | None = None, plugins: PluginHost | None = None):
         self.mission = mission
         self.vehicle = vehicle
         self.emit = emit
@@ -79,6 +80,7 @@ class Executive:
         self.report = ExecutionReport()
         self.monitors: SafetyMonitors | None = None
         self.usbl_available = mission.sensors.usbl is not None
+        self.plugins = plugins
 
     def unsupported(self) -> list[RouteElement]:
         return [e for e in self.mission.route if e.kind not in self.agents]
@@ -99,7 +101,7 @@ class Executive:
         rep = ElementReport(element_id, kind, "running", start_time=nav.time)
         timeout = default_timeout(element, nav, self.mission)
         try:
-            agent.start(AgentContext(self.mission, element, nav, self.emit, self.report.knowledge))
+            agent.start(AgentContext(self.mission, element, nav, self.emit, self.report.knowledge, self.plugins))
             rep.planned_path = [tuple(map(float, p)) for p in agent.planned_path()]  # type: ignore[misc]
         except Exception as exc:  # an agent's fault is the element's failure, never the executive's crash
             rep.status, rep.reason, rep.end_time = "failed", f"agent failed to start: {exc!r}", nav.time
@@ -107,7 +109,8 @@ class Executive:
             return rep
         aided = self.usbl_available and agent.navigation == "usbl"
         self.vehicle.set_aiding(aided)
-        self.vehicle.set_payload(agent.payload)
+        payload = agent.payload
+        self.vehicle.set_payload(payload)
         self.emit("element_started", nav.time, element=element_id, kind=kind, timeout_s=timeout,
                   navigation="usbl" if aided else "dead-reckoning", planned_path=rep.planned_path, abort=aborting)
         while True:
@@ -131,6 +134,9 @@ class Executive:
             if agent.status is Status.FAILED:
                 rep.status, rep.reason = "failed", agent.reason
                 break
+            if agent.payload != payload:
+                payload = agent.payload
+                self.vehicle.set_payload(payload)
             self.vehicle.apply(command)
             self.vehicle.advance()
             if self.on_tick is not None:
@@ -140,6 +146,8 @@ class Executive:
         except Exception as exc:
             self.emit("agent_fault", nav.time, element=element_id, error=repr(exc))
         self.vehicle.set_payload(frozenset())
+        if self.plugins is not None:
+            self.plugins.reset()
         rep.end_time = nav.time
         rep.details = dict(agent.details)
         event = "element_finished" if rep.status == "succeeded" else "element_failed"

@@ -70,3 +70,21 @@ def wrap_deg(angle: float) -> float:
     if a <= 0.0:
         a += 360.0
     return a - 180.0
+
+
+# The down-looking camera: optical axis along body z (down), image x to starboard, image y aft (OpenCV camera
+# axes; right-handed since starboard × aft = down). The left camera sits at the body origin.
+R_BODY_CAM = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+
+
+def camera_pose(north: float, east: float, depth: float, heading_deg: float, pitch_deg: float = 0.0,
+                roll_deg: float = 0.0) -> Array:
+    """T_world_cam of the down-looking left camera on a vehicle at this pose.
+
+    >>> T = camera_pose(0.0, 0.0, 10.0, 90.0)   # heading east: image x (starboard) points south
+    >>> T[:3, 0].round(6).tolist(), T[:3, 2].round(6).tolist()
+    ([-1.0, 0.0, 0.0], [0.0, 0.0, 1.0])
+    """
+    T = pose_matrix(north, east, depth, heading_deg, pitch_deg, roll_deg)
+    T[:3, :3] = T[:3, :3] @ R_BODY_CAM
+    return T

@@ -12,6 +12,8 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from mission.plugin_api import StereoImages
+
 
 @dataclass(frozen=True)
 class NavState:
@@ -54,6 +56,7 @@ class Observation:
 
     nav: NavState
     sonar: tuple[SonarPing, ...] = ()
+    stereo: tuple[StereoImages, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -89,7 +92,7 @@ class Vehicle(Protocol):
         ...
 
     def set_payload(self, sensors: frozenset[str]) -> None:
-        """Switch the named payload sensors on (`mbes`, …) and every other one off."""
+        """Switch the named payload sensors on (`mbes`, `stereo`, …) and every other one off."""
         ...
 
     def advance(self) -> None:

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from mission.knowledge import Knowledge
+from mission.plugin_host import PluginHost
 from mission.language.models import Mission, RouteElement
 from mission.vehicle import Command, NavState, Observation
 
@@ -36,6 +37,7 @@ class AgentContext:
     nav: NavState
     emit: Callable[..., None] = field(default=lambda *a, **k: None)
     knowledge: Knowledge = field(default_factory=Knowledge)
+    plugins: PluginHost | None = None
 
 
 class Agent:
@@ -47,7 +49,7 @@ class Agent:
         self.status: Status = Status.RUNNING
         self.reason: str = ""
         self.navigation: str = "usbl"  # "usbl" or "dead-reckoning": which aiding the agent asks for
-        self.payload: frozenset[str] = frozenset()  # payload sensors the agent needs on (e.g. "mbes")
+        self.payload: frozenset[str] = frozenset()  # payload sensors the agent needs on now ("mbes", "stereo")
         self.details: dict[str, Any] = {}  # element results for metrics (agent-specific)
 
     def start(self, context: AgentContext) -> None:

@@ -22,6 +22,7 @@ from mission.language.models import (
     Inspect,
     KnownObject,
     Plugins,
+    Reference,
     RouteElement,
     Safety,
     Sensors,
@@ -113,7 +114,7 @@ def _check_route(doc: Located, parts: Parts) -> list[Diagnostic]:
     for i, element in parts.route:
         base: PathKey = ("route", i, element.kind)
         p = element.params
-        if isinstance(p, Inspect) or (element.kind == "explore" and p.object != "detected"):  # type: ignore[union-attr]
+        if isinstance(p, Inspect | Reference) or (element.kind == "explore" and p.object != "detected"):  # type: ignore[union-attr]
             oid = p.object  # type: ignore[union-attr]
             if oid not in objects and oid in parts.raw_object_ids:
                 pass  # the object itself is broken; its own diagnostics say why
@@ -127,17 +128,27 @@ def _check_route(doc: Located, parts: Parts) -> list[Diagnostic]:
                     if tid not in names:
                         out.append(doc.diagnostic(base + ("targets", k), f"object '{oid}' has no target '{tid}'"
                                                   f"{_hint(tid, names)}"))
+            elif isinstance(p, Reference):
+                names = [s.id for s in objects[oid].characteristic_points]
+                if not names:
+                    out.append(doc.diagnostic(base + ("object",), f"object '{oid}' has no characteristic points "
+                                                                 "to reference to"))
+                for k, sid in enumerate(p.point_sets if isinstance(p.point_sets, list) else []):
+                    if sid not in names:
+                        out.append(doc.diagnostic(base + ("point_sets", k), f"object '{oid}' has no point set "
+                                                                           f"'{sid}'{_hint(sid, names)}"))
         if sensors is not None:
             need = {"survey": getattr(p, "sensor", None), "explore": getattr(p, "sensor", None),
-                    "inspect": "stereo"}.get(element.kind)
+                    "inspect": "stereo", "reference": "stereo"}.get(element.kind)
             if isinstance(p, Transit) and p.navigation == "usbl":
                 need = "usbl"
             if need and getattr(sensors, need) is None:
-                key = ("navigation",) if need == "usbl" else (("sensor",) if element.kind != "inspect" else ())
+                key = ("navigation",) if need == "usbl" else (("sensor",) if element.kind in ("survey", "explore")
+                                                              else ())
                 out.append(doc.diagnostic(base + key, f"route element '{element.id}' needs the '{need}' sensor, "
                                                       f"which `sensors` does not configure"))
-        if isinstance(p, Inspect) and plugins is not None and plugins.referencing is None:
-            out.append(doc.diagnostic(base, f"inspecting '{p.object}' needs a referencing plug-in; "
+        if isinstance(p, Inspect | Reference) and plugins is not None and plugins.referencing is None:
+            out.append(doc.diagnostic(base, f"{element.kind} of '{p.object}' needs a referencing plug-in; "
                                             "name one under plugins.referencing"))
     return out
 

@@ -225,8 +225,21 @@ class Inspect(Strict):
     search: Search = Search()
 
 
+class Reference(Strict):
+    """Reference the vehicle to a known object by stereo (seed 002 §3.1–3.3): hover above the object's point
+    sets at `altitude` over its top, identify a set in the triangulated cloud, compute the vehicle's pose in the
+    object frame; when a set is not recognised, try the next position."""
+
+    object: Identifier
+    point_sets: Literal["all"] | list[Identifier] = "all"
+    altitude: Annotated[float, Field(gt=0.5, le=20)] = 3.6
+    offsets: list[Vec2] = [(0.0, 0.0), (1.5, 0.0), (-1.5, 0.0), (0.0, 1.5), (0.0, -1.5)]
+    tolerance: Annotated[float, Field(gt=0, le=1)] = 0.05
+    settle: Duration = 3.0
+
+
 Action = Literal["map", "detect_objects", "photograph", "model", "record"]
-ELEMENT_KINDS = ("transit", "survey", "explore", "inspect")
+ELEMENT_KINDS = ("transit", "survey", "explore", "inspect", "reference")
 
 
 class RouteElement(Strict):
@@ -237,6 +250,7 @@ class RouteElement(Strict):
     survey: Survey | None = None
     explore: Explore | None = None
     inspect: Inspect | None = None
+    reference: Reference | None = None
     actions: list[Action] = []
     timeout: Duration | None = None
     on_failure: Literal["continue", "abort"] = "continue"
@@ -254,7 +268,7 @@ class RouteElement(Strict):
         return next(k for k in ELEMENT_KINDS if getattr(self, k) is not None)
 
     @property
-    def params(self) -> Transit | Survey | Explore | Inspect:
+    def params(self) -> Transit | Survey | Explore | Inspect | Reference:
         return getattr(self, self.kind)  # type: ignore[no-any-return]
 
 

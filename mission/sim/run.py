@@ -13,6 +13,7 @@ from mission.events import EventLog
 from mission.executive import ExecutionReport, Executive
 from mission.language.loader import load_world
 from mission.language.models import Mission
+from mission.plugin_host import PluginHost
 from mission.sim.metrics import run_metrics
 from mission.sim.vehicle import SimulatedVehicle
 from mission.vehicle import NavState
@@ -69,7 +70,11 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
 
     wall0 = time.perf_counter()
     try:
-        report = Executive(mission, vehicle, emit, on_tick=tick).run()
+        host = PluginHost(mission.plugins.model_dump(), {"sensors": mission.sensors.model_dump()}, emit) \
+            if any(mission.plugins.model_dump().values()) else None
+        report = Executive(mission, vehicle, emit, on_tick=tick, plugins=host).run()
+        if host is not None:
+            host.close()
     finally:
         log.close()
         if bar is not None:

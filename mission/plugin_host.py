@@ -1,0 +1,79 @@
+"""The executive's side of perception plug-ins: load them by name, configure them once, and contain their
+faults. An exception or a call over the time budget becomes a `plugin_fault` event and a "not recognised"
+result; the mission goes on per its policy.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping
+from typing import Any
+
+from mission.errors import PluginError
+from mission.plugin_api import PerceptionPlugin, ReferencingResult, StereoImages
+from mission.plugins import load_plugin
+
+DEFAULT_BUDGET_S = 2.0
+
+
+class PluginHost:
+    """Plug-in instances by role (`referencing`, `odometry`), each call timed and guarded."""
+
+    def __init__(self, roles: Mapping[str, str | None], settings: Mapping[str, Any], emit: Callable[..., None],
+                 budget_s: float = DEFAULT_BUDGET_S):
+        self.emit = emit
+        self.budget_s = budget_s
+        self.plugins: dict[str, PerceptionPlugin] = {}
+        self.names: dict[str, str] = {}
+        for role, name in roles.items():
+            if name is None:
+                continue
+            factory = load_plugin(name)
+            try:
+                instance = factory()
+                instance.configure(settings)
+            except Exception as exc:
+                raise PluginError(f"perception plug-in '{name}' ({role}) failed to start: {exc!r}") from exc
+            if not isinstance(instance, PerceptionPlugin):
+                raise PluginError(f"perception plug-in '{name}' does not implement configure/process/reset/close")
+            self.plugins[role] = instance
+            self.names[role] = name
+        self.calls: list[dict[str, Any]] = []
+
+    def has(self, role: str) -> bool:
+        return role in self.plugins
+
+    def process(self, role: str, frame: StereoImages, request: Any, now: float) -> Any:
+        """Call a plug-in; on a fault or an overrun, log it and return a "not recognised" result."""
+        plugin = self.plugins.get(role)
+        if plugin is None:
+            return ReferencingResult.not_recognised(f"no '{role}' plug-in configured")
+        t0 = time.perf_counter()
+        try:
+            result = plugin.process(frame, request)
+        except Exception as exc:
+            elapsed = time.perf_counter() - t0
+            self.emit("plugin_fault", now, plugin=self.names[role], role=role, error=repr(exc),
+                      elapsed_ms=1e3 * elapsed)
+            return ReferencingResult.not_recognised(f"plug-in fault: {exc!r}", elapsed_ms=1e3 * elapsed)
+        elapsed = time.perf_counter() - t0
+        if elapsed > self.budget_s:
+            self.emit("plugin_fault", now, plugin=self.names[role], role=role,
+                      error=f"over its time budget ({1e3 * elapsed:.0f} ms > {1e3 * self.budget_s:.0f} ms)",
+                      elapsed_ms=1e3 * elapsed)
+            return ReferencingResult.not_recognised("over the time budget", elapsed_ms=1e3 * elapsed)
+        return result
+
+    def reset(self) -> None:
+        for role, plugin in self.plugins.items():
+            try:
+                plugin.reset()
+            except Exception as exc:
+                self.emit("plugin_fault", 0.0, plugin=self.names[role], role=role, error=repr(exc))
+
+    def close(self) -> None:
+        for role, plugin in self.plugins.items():
+            try:
+                plugin.close()
+            except Exception as exc:
+                self.emit("plugin_fault", 0.0, plugin=self.names[role], role=role, error=repr(exc))
