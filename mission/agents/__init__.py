@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from mission.agents.base import Agent, AgentContext, Status
+from mission.agents.reference import ReferenceAgent
 from mission.agents.survey import SurveyAgent
 from mission.agents.transit import TransitAgent
 
@@ -13,6 +14,7 @@ AgentFactory = Callable[[], Agent]
 REGISTRY: dict[str, AgentFactory] = {
     "transit": TransitAgent,
     "survey": SurveyAgent,
+    "reference": ReferenceAgent,
 }
 
 
@@ -24,5 +26,5 @@ def create_agent(kind: str) -> Agent:
     return REGISTRY[kind]()
 
 
-__all__ = ["Agent", "AgentContext", "REGISTRY", "Status", "SurveyAgent", "TransitAgent", "create_agent",
+__all__ = ["Agent", "AgentContext", "REGISTRY", "ReferenceAgent", "Status", "SurveyAgent", "TransitAgent", "create_agent",
            "supported_kinds"]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import math
 from typing import Any
 
@@ -9,6 +10,7 @@ import numpy as np
 from shapely.geometry import Polygon
 
 from mission.executive import ElementReport, ExecutionReport
+from mission.frames import heading_of, invert, wrap_deg
 from mission.language.models import Mission
 from mission.sim.vehicle import SimulatedVehicle
 from mission.world.scene import Scene
@@ -44,8 +46,29 @@ def _survey_truth(item: dict[str, Any], rep: ElementReport, mission: Mission, sc
     item["missed"] = [t[0] for t in truth if t[4] and t[3] >= MIN_OBJECT_HEIGHT_M and t[0] not in found]
 
 
+def _reference_truth(item: dict[str, Any], vehicle: SimulatedVehicle, scene: Scene) -> None:
+    """Score every referencing attempt: the camera's estimated pose in the object frame against the truth."""
+    truth = next((o for o in scene.objects if o.database == item.get("object") or o.id == item.get("object")), None)
+    frames = dict(vehicle.log.frames)
+    for attempt in item.get("attempts", []):
+        T_world_cam_true = frames.get(attempt["time"])
+        est = attempt.pop("T_object_cam", None)
+        attempt.pop("T_world_cam_est", None)
+        attempt.pop("T_world_object_est", None)
+        if truth is None or T_world_cam_true is None or est is None:
+            continue
+        T_true = invert(truth.T_world_object) @ np.asarray(T_world_cam_true)
+        T_est = np.asarray(est)
+        attempt["position_error_m"] = round(float(np.linalg.norm(T_est[:3, 3] - T_true[:3, 3])), 4)
+        cos = (np.trace(T_est[:3, :3].T @ T_true[:3, :3]) - 1.0) / 2.0
+        attempt["rotation_error_deg"] = round(math.degrees(math.acos(min(1.0, max(-1.0, cos)))), 3)
+        attempt["heading_error_deg"] = round(abs(wrap_deg(heading_of(T_est) - heading_of(T_true))), 3)
+    item["recognised"] = any(a["recognised"] for a in item.get("attempts", []))
+
+
 def _element_metrics(report: ExecutionReport, times: np.ndarray, north: np.ndarray, east: np.ndarray,
-                     mission: Mission, scene: Scene) -> list[dict[str, Any]]:
+                     vehicle: SimulatedVehicle, scene: Scene) -> list[dict[str, Any]]:
+    mission = vehicle.mission
     out = []
     step = np.hypot(np.diff(north, prepend=north[:1]), np.diff(east, prepend=east[:1])) if len(north) else north
     for rep in report.elements:
@@ -61,9 +84,11 @@ def _element_metrics(report: ExecutionReport, times: np.ndarray, north: np.ndarr
         if math.isfinite(rep.end_time) and len(times):
             window = (times > rep.start_time) & (times <= rep.end_time)
             item["path_length_m"] = round(float(step[window].sum()), 2)
-        item.update(rep.details)
+        item.update(copy.deepcopy(rep.details))
         if rep.kind == "survey":
             _survey_truth(item, rep, mission, scene)
+        if rep.kind == "reference":
+            _reference_truth(item, vehicle, scene)
         out.append(item)
     return out
 
@@ -90,7 +115,7 @@ def run_metrics(mission_name: str, seed: int, report: ExecutionReport, vehicle: 
         "distance_m": round(vehicle.distance_m, 2),
         "energy_wh": round(vehicle.energy_used_wh, 2),
         "energy_remaining_percent": round(100.0 * (1.0 - vehicle.energy_used_wh / capacity), 2),
-        "elements": _element_metrics(report, times, north, east, vehicle.mission, scene),
+        "elements": _element_metrics(report, times, north, east, vehicle, scene),
         "safety_violations": report.violations,
         "seabed_contacts": vehicle.log.seabed_contacts,
         "navigation": {

@@ -16,6 +16,7 @@ from mission.language.models import Mission
 from mission.navigation import NavigationFilter
 from mission.sim import kinematics
 from mission.sim.kinematics import TrueState
+from mission.plugin_api import StereoImages
 from mission.vehicle import Command, NavState, Observation, SonarPing
 from mission.world.scene import Scene
 
@@ -46,6 +47,7 @@ class SimLog:
     fixes: list[UsblFix] = field(default_factory=list)
     seabed_contacts: int = 0
     pings: int = 0
+    frames: list[tuple[float, Any]] = field(default_factory=list)  # (time, true T_world_left) of each pair
 
 
 class SimulatedVehicle:
@@ -79,6 +81,9 @@ class SimulatedVehicle:
         self.mbes: Any = None
         self.next_ping = 0.0
         self.pending_pings: list[SonarPing] = []
+        self.camera: Any = None
+        self.next_frame = 0.0
+        self.pending_frames: list[StereoImages] = []
         self.log = SimLog()
         self._measure()
 
@@ -135,13 +140,24 @@ class SimulatedVehicle:
             self.log.pings += 1
             self.next_ping += period
 
+    def _capture(self) -> None:
+        """A stereo pair rendered from the true pose; the truth of its pose goes to the log, not the agent."""
+        t = self.truth
+        if t.time + 1e-9 < self.next_frame:
+            return
+        frame = self.camera.render(t.north, t.east, t.depth, t.heading)
+        self.pending_frames.append(StereoImages(t.time, frame.left, frame.right, frame.K, frame.baseline))
+        self.log.frames.append((t.time, frame.T_world_left))
+        self.next_frame = t.time + 1.0 / self.mission.sensors.stereo.rate_hz  # type: ignore[union-attr]
+
     def observe(self) -> Observation:
         f = self.filter
         pings, self.pending_pings = tuple(self.pending_pings), []
+        frames, self.pending_frames = tuple(self.pending_frames), []
         return Observation(NavState(
             time=self.truth.time, north=f.north, east=f.east, depth=self.depth_meas, heading=self.heading_meas,
             speed=self.truth.speed, altitude=self.altitude_meas, position_sigma=f.sigma,
-            energy_wh=self.mission.vehicle.energy_wh - self.energy_used_wh), sonar=pings)
+            energy_wh=self.mission.vehicle.energy_wh - self.energy_used_wh), sonar=pings, stereo=frames)
 
     def apply(self, command: Command) -> None:
         self.command = command
@@ -158,6 +174,13 @@ class SimulatedVehicle:
             world = mjworld_for(self.scene)
             self.mbes = Multibeam.from_settings(world, self.mission.sensors.mbes, seed=self.rng.randrange(2**31))
             self.next_ping = self.truth.time
+        if "stereo" in sensors and self.camera is None and self.mission.sensors.stereo is not None:
+            from mission.sim.camera import StereoCamera
+            from mission.sim.mjworld import mjworld_for
+
+            self.camera = StereoCamera(mjworld_for(self.scene), self.mission.sensors.stereo)
+        if "stereo" in sensors:
+            self.next_frame = max(self.next_frame, self.truth.time)
 
     def advance(self) -> None:
         dt = self.control_period
@@ -184,6 +207,8 @@ class SimulatedVehicle:
             self._usbl()
         if self.mbes is not None and "mbes" in self.payload:
             self._ping()
+        if self.camera is not None and "stereo" in self.payload:
+            self._capture()
         self.record()
 
     def record(self) -> None:

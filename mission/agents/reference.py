@@ -1,0 +1,123 @@
+"""The `reference` agent (seed 002 §3.1–3.3): hover above a known object's characteristic-point sets, take a
+stereo pair, let the referencing plug-in identify a set and compute the camera's pose in the object frame;
+when no set is recognised, move to the next position and try again.
+
+Positions are the centroids of the requested point sets, placed with the database pose (which may be metres
+off: recognition tolerates that), each shifted by the element's `offsets`. Every attempt is recorded in
+`details["attempts"]` with the estimated camera pose, so that metrics can score it against the truth.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from mission.agents.base import Agent, AgentContext
+from mission.frames import camera_pose, invert, pose_matrix, transform_points
+from mission.language.models import KnownObject, Reference
+from mission.plugin_api import PointSetModel, ReferencingRequest, ReferencingResult
+from mission.vehicle import Command, Observation
+
+ARRIVAL_M = 0.6  # horizontal distance (estimated) at which the vehicle stops to hover
+DEPTH_TOLERANCE_M = 0.3
+
+
+def database_pose(obj: KnownObject) -> np.ndarray:
+    """T_world_object as the database has it (z parallel to the world z, per seed 000 §3.1)."""
+    return pose_matrix(obj.pose.north, obj.pose.east, obj.pose.depth, obj.pose.heading)
+
+
+class ReferenceAgent(Agent):
+    kind = "reference"
+
+    def start(self, context: AgentContext) -> None:
+        p = context.element.reference
+        assert p is not None
+        self.params: Reference = p
+        self.context = context
+        self.obj = context.mission.object(p.object)
+        wanted = p.point_sets if isinstance(p.point_sets, list) else [s.id for s in self.obj.characteristic_points]
+        self.sets = [s for s in self.obj.characteristic_points if s.id in wanted]
+        self.models = tuple(PointSetModel(self.obj.id, s.id, np.asarray(s.points, dtype=float)) for s in self.sets)
+        self.T_world_object_db = database_pose(self.obj)
+        self.positions: list[tuple[float, float, float, str]] = []  # north, east, depth, set id
+        for pset in self.sets:
+            points_world = transform_points(self.T_world_object_db, np.asarray(pset.points, dtype=float))
+            centre = points_world.mean(axis=0)
+            top = float(points_world[:, 2].min())
+            for dn, de in p.offsets:
+                self.positions.append((float(centre[0] + dn), float(centre[1] + de), top - p.altitude, pset.id))
+        self.index = 0
+        self.phase = "go"
+        self.hold_since = math.nan
+        self.attempts: list[dict[str, Any]] = []
+        self.details = {"object": self.obj.id, "attempts": self.attempts}
+        self.speed = min(context.mission.vehicle.cruise_speed, 1.0)
+        if context.plugins is None or not context.plugins.has("referencing"):
+            self.fail("no referencing plug-in is loaded")
+
+    def planned_path(self) -> list[tuple[float, float]]:
+        return [(n, e) for n, e, _, _ in self.positions]
+
+    def _request(self, obs: Observation) -> tuple[ReferencingRequest, np.ndarray]:
+        nav = obs.nav
+        T_world_cam = camera_pose(nav.north, nav.east, nav.depth, nav.heading)
+        prior = invert(T_world_cam) @ self.T_world_object_db
+        return ReferencingRequest(self.models, prior, self.params.tolerance), T_world_cam
+
+    def _attempt(self, obs: Observation) -> None:
+        frame = obs.stereo[-1]
+        request, T_world_cam = self._request(obs)
+        assert self.context.plugins is not None
+        t0 = time.perf_counter()
+        result: ReferencingResult = self.context.plugins.process("referencing", frame, request, obs.nav.time)
+        elapsed_ms = 1e3 * (time.perf_counter() - t0)
+        record: dict[str, Any] = {
+            "time": frame.time, "position": self.index, "recognised": bool(result.recognised),
+            "set": result.set_id, "matched": int(result.matched), "residual_m": float(result.residual_rms),
+            "ambiguous": bool(result.ambiguous), "cloud_points": int(result.cloud_points),
+            "time_ms": round(elapsed_ms, 1), "T_world_cam_est": T_world_cam.round(6).tolist()}
+        if result.recognised and result.T_cam_object is not None:
+            T_object_cam = invert(result.T_cam_object)
+            record["T_object_cam"] = T_object_cam.round(6).tolist()
+            T_world_object = T_world_cam @ result.T_cam_object
+            record["T_world_object_est"] = T_world_object.round(6).tolist()
+        if result.details.get("reason"):
+            record["reason"] = result.details["reason"]
+        self.attempts.append(record)
+        self.context.emit("referencing_attempt", obs.nav.time, element=self.context.element.id,
+                          **{k: v for k, v in record.items() if not k.startswith("T_")})
+        if result.recognised:
+            self.succeed()
+        else:
+            self.index += 1
+            self.phase = "go"
+            if self.index >= len(self.positions):
+                self.fail(f"no point set of '{self.obj.id}' recognised in {len(self.attempts)} attempts")
+
+    def step(self, observation: Observation) -> Command:
+        nav = observation.nav
+        if self.index >= len(self.positions):
+            return Command.hold(nav)
+        north, east, depth, _ = self.positions[self.index]
+        distance = math.hypot(north - nav.north, east - nav.east)
+        if self.phase == "go":
+            if distance <= ARRIVAL_M and abs(nav.depth - depth) <= DEPTH_TOLERANCE_M:
+                self.phase, self.hold_since = "settle", nav.time
+            heading = math.degrees(math.atan2(east - nav.east, north - nav.north)) % 360.0 if distance > 1.0 \
+                else nav.heading
+            speed = min(self.speed, max(0.1, 0.3 * distance)) if distance > ARRIVAL_M * 0.5 else 0.0
+            return Command(heading, speed, depth=depth)
+        if self.phase == "settle":
+            if nav.time - self.hold_since >= self.params.settle:
+                self.phase = "capture"
+                self.payload = frozenset({"stereo"})
+            return Command(nav.heading, 0.0, depth=depth)
+        # capture: the first frame that arrives is used
+        if observation.stereo:
+            self.payload = frozenset()
+            self._attempt(observation)
+        return Command(nav.heading, 0.0, depth=depth)
