@@ -233,7 +233,8 @@ class Reference(Strict):
     object: Identifier
     point_sets: Literal["all"] | list[Identifier] = "all"
     altitude: Annotated[float, Field(gt=0.5, le=20)] = 3.6
-    offsets: list[Vec2] = [(0.0, 0.0), (1.5, 0.0), (-1.5, 0.0), (0.0, 1.5), (0.0, -1.5)]
+    offsets: list[Vec2] = [(0.0, 0.0), (1.5, 0.0), (-1.5, 0.0), (0.0, 1.5), (0.0, -1.5),
+                           (1.5, 1.5), (1.5, -1.5), (-1.5, 1.5), (-1.5, -1.5)]  # north, east (m) around each set
     tolerance: Annotated[float, Field(gt=0, le=1)] = 0.05
     settle: Duration = 3.0
 
