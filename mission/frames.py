@@ -73,18 +73,21 @@ def wrap_deg(angle: float) -> float:
 
 
 # The down-looking camera: optical axis along body z (down), image x to starboard, image y aft (OpenCV camera
-# axes; right-handed since starboard × aft = down). The left camera sits at the body origin.
+# axes; right-handed since starboard × aft = down). The left camera sits baseline/2 to port of the body origin,
+# the right one baseline/2 to starboard.
 R_BODY_CAM = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
 
 def camera_pose(north: float, east: float, depth: float, heading_deg: float, pitch_deg: float = 0.0,
-                roll_deg: float = 0.0) -> Array:
+                roll_deg: float = 0.0, baseline: float = 0.0) -> Array:
     """T_world_cam of the down-looking left camera on a vehicle at this pose.
 
-    >>> T = camera_pose(0.0, 0.0, 10.0, 90.0)   # heading east: image x (starboard) points south
-    >>> T[:3, 0].round(6).tolist(), T[:3, 2].round(6).tolist()
-    ([-1.0, 0.0, 0.0], [0.0, 0.0, 1.0])
+    >>> T = camera_pose(0.0, 0.0, 10.0, 90.0, baseline=0.5)  # heading east: image x (starboard) points south
+    >>> T[:3, 0].round(6).tolist(), T[:3, 2].round(6).tolist(), (T[:3, 3].round(6) + 0.0).tolist()
+    ([-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.25, 0.0, 10.0])
     """
-    T = pose_matrix(north, east, depth, heading_deg, pitch_deg, roll_deg)
-    T[:3, :3] = T[:3, :3] @ R_BODY_CAM
-    return T
+    T_world_body = pose_matrix(north, east, depth, heading_deg, pitch_deg, roll_deg)
+    T_body_cam = np.eye(4)
+    T_body_cam[:3, :3] = R_BODY_CAM
+    T_body_cam[:3, 3] = (0.0, -baseline / 2.0, 0.0)
+    return T_world_body @ T_body_cam

@@ -64,7 +64,9 @@ class ReferenceAgent(Agent):
 
     def _request(self, obs: Observation) -> tuple[ReferencingRequest, np.ndarray]:
         nav = obs.nav
-        T_world_cam = camera_pose(nav.north, nav.east, nav.depth, nav.heading)
+        stereo = self.context.mission.sensors.stereo
+        T_world_cam = camera_pose(nav.north, nav.east, nav.depth, nav.heading,
+                                  baseline=stereo.baseline if stereo is not None else 0.0)
         prior = invert(T_world_cam) @ self.T_world_object_db
         return ReferencingRequest(self.models, prior, self.params.tolerance), T_world_cam
 
