@@ -61,17 +61,25 @@ class Observation:
 
 @dataclass(frozen=True)
 class Command:
-    """Autopilot setpoints: heading (deg), speed through water (m/s), and depth or altitude (m) or neither."""
+    """Autopilot setpoints: heading (deg), speed through water (m/s), and depth or altitude (m) or neither.
+
+    `station` (north, east in the estimated frame) asks a hover-capable vehicle to hold that point: the
+    autopilot then drives towards it at up to `HOVER_SPEED` whatever the heading, and `speed` is ignored."""
 
     heading: float
     speed: float
     depth: float | None = None
     altitude: float | None = None
+    station: tuple[float, float] | None = None
 
     @staticmethod
     def hold(nav: NavState) -> Command:
         """Stop and keep the current depth and heading."""
         return Command(heading=nav.heading, speed=0.0, depth=nav.depth)
+
+
+HOVER_SPEED = 0.3  # m/s: the fastest a station-keeping vehicle moves towards its station
+HOVER_GAIN = 0.5  # (m/s) per metre of station error
 
 
 class Vehicle(Protocol):

@@ -2,9 +2,12 @@
 stereo pair, let the referencing plug-in identify a set and compute the camera's pose in the object frame;
 when no set is recognised, move to the next position and try again.
 
-Positions are the centroids of the requested point sets, placed with the database pose (which may be metres
-off: recognition tolerates that), each shifted by the element's `offsets`. Every attempt is recorded in
-`details["attempts"]` with the estimated camera pose, so that metrics can score it against the truth.
+Two stages. Search: positions are the centroids of the requested point sets placed with the database pose
+(which may be metres off), each shifted by the element's `offsets`, at `search_altitude` for a wide view. Fine:
+once a set is recognised, the vehicle hovers over that set's estimated centroid at `altitude`, turned so that
+the image's long side runs along the object's x-axis, and references again with the now-good prior; that is the
+element's result. Every attempt is recorded in `details["attempts"]` with the estimated camera pose, so that
+metrics can score it against the truth.
 """
 
 from __future__ import annotations
@@ -16,13 +19,15 @@ from typing import Any
 import numpy as np
 
 from mission.agents.base import Agent, AgentContext
-from mission.frames import camera_pose, invert, pose_matrix, transform_points
+from mission.frames import camera_pose, invert, pose_matrix, transform_points, wrap_deg
 from mission.language.models import KnownObject, Reference
 from mission.plugin_api import PointSetModel, ReferencingRequest, ReferencingResult
 from mission.vehicle import Command, Observation
 
-ARRIVAL_M = 0.6  # horizontal distance (estimated) at which the vehicle stops to hover
+ARRIVAL_M = 0.3  # horizontal distance (estimated) at which the vehicle counts as over its position
+STATION_M = 4.0  # within this distance the vehicle station-keeps instead of cruising
 DEPTH_TOLERANCE_M = 0.3
+HEADING_TOLERANCE_DEG = 3.0
 
 
 def database_pose(obj: KnownObject) -> np.ndarray:
@@ -49,7 +54,11 @@ class ReferenceAgent(Agent):
             centre = points_world.mean(axis=0)
             top = float(points_world[:, 2].min())
             for dn, de in p.offsets:
-                self.positions.append((float(centre[0] + dn), float(centre[1] + de), top - p.altitude, pset.id))
+                self.positions.append((float(centre[0] + dn), float(centre[1] + de), top - p.search_altitude,
+                                       pset.id))
+        self.fine: tuple[float, float, float, float] | None = None  # north, east, depth, heading
+        self.fine_tries = 0
+        self.T_world_object_est: np.ndarray | None = None
         self.index = 0
         self.phase = "go"
         self.hold_since = math.nan
@@ -67,8 +76,20 @@ class ReferenceAgent(Agent):
         stereo = self.context.mission.sensors.stereo
         T_world_cam = camera_pose(nav.north, nav.east, nav.depth, nav.heading,
                                   baseline=stereo.baseline if stereo is not None else 0.0)
-        prior = invert(T_world_cam) @ self.T_world_object_db
+        T_world_object = self.T_world_object_est if self.T_world_object_est is not None else self.T_world_object_db
+        prior = invert(T_world_cam) @ T_world_object
         return ReferencingRequest(self.models, prior, self.params.tolerance), T_world_cam
+
+    def _fine_pose(self, set_id: str) -> tuple[float, float, float, float]:
+        """Hover over the recognised set's estimated centroid, image x along the object's x-axis."""
+        assert self.T_world_object_est is not None
+        pset = next(s for s in self.sets if s.id == set_id)
+        points_world = transform_points(self.T_world_object_est, np.asarray(pset.points, dtype=float))
+        centre = points_world.mean(axis=0)
+        x_axis = self.T_world_object_est[:3, 0]
+        object_heading = math.degrees(math.atan2(x_axis[1], x_axis[0]))
+        return (float(centre[0]), float(centre[1]), float(points_world[:, 2].min()) - self.params.altitude,
+                (object_heading - 90.0) % 360.0)
 
     def _attempt(self, obs: Observation) -> None:
         frame = obs.stereo[-1]
@@ -78,7 +99,8 @@ class ReferenceAgent(Agent):
         result: ReferencingResult = self.context.plugins.process("referencing", frame, request, obs.nav.time)
         elapsed_ms = 1e3 * (time.perf_counter() - t0)
         record: dict[str, Any] = {
-            "time": frame.time, "position": self.index, "recognised": bool(result.recognised),
+            "time": frame.time, "stage": "fine" if self.fine is not None else "search", "position": self.index,
+            "recognised": bool(result.recognised),
             "set": result.set_id, "matched": int(result.matched), "residual_m": float(result.residual_rms),
             "ambiguous": bool(result.ambiguous), "cloud_points": int(result.cloud_points),
             "time_ms": round(elapsed_ms, 1), "T_world_cam_est": T_world_cam.round(6).tolist()}
@@ -91,35 +113,51 @@ class ReferenceAgent(Agent):
             record["reason"] = result.details["reason"]
         self.attempts.append(record)
         self.context.emit("referencing_attempt", obs.nav.time, element=self.context.element.id,
-                          **{k: v for k, v in record.items() if not k.startswith("T_")})
-        if result.recognised:
-            self.succeed()
-        else:
-            self.index += 1
+                          **{k: v for k, v in record.items() if not k.startswith("T_") and k != "time"})
+        if result.recognised and result.T_cam_object is not None:
+            self.T_world_object_est = T_world_cam @ result.T_cam_object
+            if self.fine is not None:
+                self.details["final"] = len(self.attempts) - 1
+                self.succeed()
+                return
+            self.fine = self._fine_pose(str(result.set_id))
             self.phase = "go"
-            if self.index >= len(self.positions):
-                self.fail(f"no point set of '{self.obj.id}' recognised in {len(self.attempts)} attempts")
+            return
+        if self.fine is not None and self.fine_tries < 2:
+            self.fine_tries += 1
+            self.phase = "go"
+            return
+        self.fine, self.fine_tries, self.T_world_object_est = None, 0, None
+        self.index += 1
+        self.phase = "go"
+        if self.index >= len(self.positions):
+            self.fail(f"no point set of '{self.obj.id}' recognised in {len(self.attempts)} attempts")
 
     def step(self, observation: Observation) -> Command:
         nav = observation.nav
         if self.index >= len(self.positions):
             return Command.hold(nav)
-        north, east, depth, _ = self.positions[self.index]
+        if self.fine is not None:
+            north, east, depth, final_heading = self.fine
+        else:
+            north, east, depth, _ = self.positions[self.index]
+            final_heading = nav.heading
         distance = math.hypot(north - nav.north, east - nav.east)
         if self.phase == "go":
-            if distance <= ARRIVAL_M and abs(nav.depth - depth) <= DEPTH_TOLERANCE_M:
+            aligned = abs(wrap_deg(nav.heading - final_heading)) <= HEADING_TOLERANCE_DEG
+            if distance <= ARRIVAL_M and abs(nav.depth - depth) <= DEPTH_TOLERANCE_M and aligned:
                 self.phase, self.hold_since = "settle", nav.time
-            heading = math.degrees(math.atan2(east - nav.east, north - nav.north)) % 360.0 if distance > 1.0 \
-                else nav.heading
-            speed = min(self.speed, max(0.1, 0.3 * distance)) if distance > ARRIVAL_M * 0.5 else 0.0
-            return Command(heading, speed, depth=depth)
+            if distance > STATION_M:
+                heading = math.degrees(math.atan2(east - nav.east, north - nav.north)) % 360.0
+                return Command(heading, min(self.speed, max(0.3, 0.2 * distance)), depth=depth)
+            return Command(final_heading, 0.0, depth=depth, station=(north, east))
         if self.phase == "settle":
             if nav.time - self.hold_since >= self.params.settle:
                 self.phase = "capture"
                 self.payload = frozenset({"stereo"})
-            return Command(nav.heading, 0.0, depth=depth)
+            return Command(final_heading, 0.0, depth=depth, station=(north, east))
         # capture: the first frame that arrives is used
         if observation.stereo:
             self.payload = frozenset()
             self._attempt(observation)
-        return Command(nav.heading, 0.0, depth=depth)
+        return Command(final_heading, 0.0, depth=depth, station=(north, east))

@@ -226,13 +226,15 @@ class Inspect(Strict):
 
 
 class Reference(Strict):
-    """Reference the vehicle to a known object by stereo (seed 002 §3.1–3.3): hover above the object's point
-    sets at `altitude` over its top, identify a set in the triangulated cloud, compute the vehicle's pose in the
-    object frame; when a set is not recognised, try the next position."""
+    """Reference the vehicle to a known object by stereo (seed 002 §3.1–3.3): search above the object's point
+    sets at `search_altitude` over their tops until a set is identified in the triangulated cloud, then hover
+    centred over it at `altitude`, aligned with the object, and reference precisely; when a set is not
+    recognised, try the next position (database pose + `offsets`)."""
 
     object: Identifier
     point_sets: Literal["all"] | list[Identifier] = "all"
-    altitude: Annotated[float, Field(gt=0.5, le=20)] = 3.6
+    altitude: Annotated[float, Field(gt=0.5, le=20)] = 3.6  # of the final, precise referencing
+    search_altitude: Annotated[float, Field(gt=0.5, le=30)] = 6.0  # while searching: a wider view
     offsets: list[Vec2] = [(0.0, 0.0), (1.5, 0.0), (-1.5, 0.0), (0.0, 1.5), (0.0, -1.5),
                            (1.5, 1.5), (1.5, -1.5), (-1.5, 1.5), (-1.5, -1.5)]  # north, east (m) around each set
     tolerance: Annotated[float, Field(gt=0, le=1)] = 0.05

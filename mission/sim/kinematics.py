@@ -28,8 +28,12 @@ class TrueState:
 
 
 def step(state: TrueState, heading_cmd: float, speed_cmd: float, depth_cmd: float, heading_meas: float,
-         depth_meas: float, limits: Vehicle, current: tuple[float, float], dt: float) -> None:
-    """Advance the true state by dt towards the setpoints; the autopilot closes its loops on measurements."""
+         depth_meas: float, limits: Vehicle, current: tuple[float, float], dt: float,
+         hover_velocity: tuple[float, float] | None = None) -> None:
+    """Advance the true state by dt towards the setpoints; the autopilot closes its loops on measurements.
+
+    With `hover_velocity` (north, east over ground, m/s) the vehicle station-keeps: its thrusters hold that
+    ground velocity against the current (the DVL measures velocity over ground), whatever the heading."""
     target = min(max(speed_cmd, 0.0), limits.max_speed)
     dv = limits.max_acceleration * dt
     state.speed += min(max(target - state.speed, -dv), dv)
@@ -40,8 +44,12 @@ def step(state: TrueState, heading_cmd: float, speed_cmd: float, depth_cmd: floa
     state.heading = (state.heading + rate * dt) % 360.0
     w = min(max(DEPTH_GAIN * (depth_cmd - depth_meas), -limits.max_vertical_speed), limits.max_vertical_speed)
     h = math.radians(state.heading)
-    state.v_north = state.speed * math.cos(h) + current[0]
-    state.v_east = state.speed * math.sin(h) + current[1]
+    if hover_velocity is not None:
+        state.speed = math.hypot(*hover_velocity)
+        state.v_north, state.v_east = hover_velocity
+    else:
+        state.v_north = state.speed * math.cos(h) + current[0]
+        state.v_east = state.speed * math.sin(h) + current[1]
     state.v_down = w
     state.north += state.v_north * dt
     state.east += state.v_east * dt

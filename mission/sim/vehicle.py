@@ -17,7 +17,7 @@ from mission.navigation import NavigationFilter
 from mission.sim import kinematics
 from mission.sim.kinematics import TrueState
 from mission.plugin_api import StereoImages
-from mission.vehicle import Command, NavState, Observation, SonarPing
+from mission.vehicle import HOVER_GAIN, HOVER_SPEED, Command, NavState, Observation, SonarPing
 from mission.world.scene import Scene
 
 HEADING_SIGMA_DEG = 0.3
@@ -190,8 +190,13 @@ class SimulatedVehicle:
         else:
             depth_cmd = cmd.depth if cmd.depth is not None else self.depth_meas
         n0, e0, d0 = t.north, t.east, t.depth
+        hover = None
+        if cmd.station is not None:  # station keeping on the estimate
+            en, ee = cmd.station[0] - self.filter.north, cmd.station[1] - self.filter.east
+            gain = min(HOVER_GAIN, HOVER_SPEED / max(math.hypot(en, ee), 1e-9))
+            hover = (gain * en, gain * ee)
         kinematics.step(t, cmd.heading, cmd.speed, depth_cmd, self.heading_meas, self.depth_meas, v,
-                        self.scene.current, dt)
+                        self.scene.current, dt, hover)
         floor = self.scene.surface.depth_at(t.north, t.east)
         if t.depth > floor:  # the kinematic model cannot pass through the seabed; count the contact
             t.depth = floor
