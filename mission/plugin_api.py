@@ -54,6 +54,7 @@ class ReferencingRequest:
     sets: tuple[PointSetModel, ...]
     prior_T_cam_object: Matrix | None = None  # from the database pose and the navigation estimate
     tolerance: float = 0.05  # metres, pairwise-distance consistency
+    prior_radius: float | None = None  # metres: how far the prior may be off; cloud points farther are ignored
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,6 +69,8 @@ class ReferencingResult:
     ambiguous: bool = False
     cloud_points: int = 0
     details: dict[str, Any] = field(default_factory=dict)
+    model_points: Matrix | None = None  # (k, 3) identified characteristic points, object frame
+    points_cam: Matrix | None = None  # (k, 3) the cloud points they were identified with, camera frame
 
     @staticmethod
     def not_recognised(reason: str = "", **details: Any) -> ReferencingResult:

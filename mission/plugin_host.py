@@ -13,7 +13,7 @@ from mission.errors import PluginError
 from mission.plugin_api import PerceptionPlugin, ReferencingResult, StereoImages
 from mission.plugins import load_plugin
 
-DEFAULT_BUDGET_S = 2.0
+DEFAULT_BUDGET_S = 5.0  # per call; generous for a software renderer's machine, tight enough to catch a hang
 
 
 class PluginHost:

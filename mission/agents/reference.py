@@ -28,6 +28,11 @@ ARRIVAL_M = 0.3  # horizontal distance (estimated) at which the vehicle counts a
 STATION_M = 4.0  # within this distance the vehicle station-keeps instead of cruising
 DEPTH_TOLERANCE_M = 0.3
 HEADING_TOLERANCE_DEG = 3.0
+FINE_VIEWS = 3  # recognised views fused into the final referencing
+FINE_SHIFT_M = 0.15  # successive fine views move this far along the object's x-axis
+SEARCH_PRIOR_RADIUS_M = 4.0  # how far the database pose plus navigation may be off
+FINE_PRIOR_RADIUS_M = 0.4  # how far a search-stage referencing may be off
+VIEW_AGREEMENT_M = 0.04  # fine views whose transforms place the set's points this close agree
 
 
 def database_pose(obj: KnownObject) -> np.ndarray:
@@ -59,6 +64,10 @@ class ReferenceAgent(Agent):
         self.fine: tuple[float, float, float, float] | None = None  # north, east, depth, heading
         self.fine_tries = 0
         self.T_world_object_est: np.ndarray | None = None
+        self.views: list[tuple[np.ndarray, np.ndarray]] = []  # (model points, world points) of fine views
+        # Near the object the DVL's relative navigation is steadier than acoustic fixes, whose updates would
+        # shift the estimate between the views that are fused.
+        self.navigation = "dead-reckoning"
         self.index = 0
         self.phase = "go"
         self.hold_since = math.nan
@@ -78,15 +87,17 @@ class ReferenceAgent(Agent):
                                   baseline=stereo.baseline if stereo is not None else 0.0)
         T_world_object = self.T_world_object_est if self.T_world_object_est is not None else self.T_world_object_db
         prior = invert(T_world_cam) @ T_world_object
-        return ReferencingRequest(self.models, prior, self.params.tolerance), T_world_cam
+        # While searching, the prior is the database pose (metres off); once referenced, centimetres.
+        radius = FINE_PRIOR_RADIUS_M if self.fine is not None else SEARCH_PRIOR_RADIUS_M
+        return ReferencingRequest(self.models, prior, self.params.tolerance, radius), T_world_cam
 
     def _fine_pose(self, set_id: str) -> tuple[float, float, float, float]:
         """Hover over the recognised set's estimated centroid, image x along the object's x-axis."""
         assert self.T_world_object_est is not None
         pset = next(s for s in self.sets if s.id == set_id)
         points_world = transform_points(self.T_world_object_est, np.asarray(pset.points, dtype=float))
-        centre = points_world.mean(axis=0)
         x_axis = self.T_world_object_est[:3, 0]
+        centre = points_world.mean(axis=0)
         object_heading = math.degrees(math.atan2(x_axis[1], x_axis[0]))
         return (float(centre[0]), float(centre[1]), float(points_world[:, 2].min()) - self.params.altitude,
                 (object_heading - 90.0) % 360.0)
@@ -117,21 +128,65 @@ class ReferenceAgent(Agent):
         if result.recognised and result.T_cam_object is not None:
             self.T_world_object_est = T_world_cam @ result.T_cam_object
             if self.fine is not None:
-                self.details["final"] = len(self.attempts) - 1
-                self.succeed()
+                if result.model_points is not None and result.points_cam is not None:
+                    self.views.append((result.model_points, transform_points(T_world_cam, result.points_cam)))
+                if len(self.views) >= FINE_VIEWS and self._fuse(T_world_cam, record):
+                    self.succeed()
+                    return
+                north, east, depth, heading = self.fine
+                shift = FINE_SHIFT_M * (1 if len(self.views) % 2 else -1)  # 0, +shift, 0, +shift ... along x
+                x_axis = self.T_world_object_est[:3, 0]
+                self.fine = (north + shift * float(x_axis[0]), east + shift * float(x_axis[1]), depth, heading)
+                self.phase = "go"
                 return
             self.fine = self._fine_pose(str(result.set_id))
             self.phase = "go"
             return
-        if self.fine is not None and self.fine_tries < 2:
+        if self.fine is not None and self.fine_tries < 2 * FINE_VIEWS:
             self.fine_tries += 1
             self.phase = "go"
             return
-        self.fine, self.fine_tries, self.T_world_object_est = None, 0, None
+        self.fine, self.fine_tries, self.T_world_object_est, self.views = None, 0, None, []
         self.index += 1
         self.phase = "go"
         if self.index >= len(self.positions):
             self.fail(f"no point set of '{self.obj.id}' recognised in {len(self.attempts)} attempts")
+
+    def _consistent_views(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The largest group of fine views whose own transforms agree (a wrong identification that slipped
+        through would otherwise pull the fused transform)."""
+        from perception_plugins.referencing import rigid_transform
+
+        probe = np.vstack([m for m, _ in self.views])
+        placed = [transform_points(rigid_transform(m, w), probe) for m, w in self.views]
+        agree = [[j for j in range(len(placed))
+                  if float(np.max(np.linalg.norm(placed[i] - placed[j], axis=1))) <= VIEW_AGREEMENT_M]
+                 for i in range(len(placed))]
+        best = max(agree, key=len)
+        return [self.views[j] for j in best]
+
+    def _fuse(self, T_world_cam: np.ndarray, last: dict[str, Any]) -> bool:
+        """One least-squares transform from the points of the agreeing fine views (seed 000, approach 3), placed
+        in the world with the (dead-reckoned) estimate of each view; the camera pose of the last view in it.
+        False while fewer than two views agree."""
+        from perception_plugins.referencing import rigid_transform
+
+        views = self._consistent_views()
+        if len(views) < 2:
+            return False
+        model = np.vstack([m for m, _ in views])
+        world = np.vstack([w for _, w in views])
+        T_world_object = rigid_transform(model, world)
+        self.T_world_object_est = T_world_object
+        fused = {**{k: v for k, v in last.items() if not k.startswith("T_")}, "stage": "fused",
+                 "matched": len(model), "views": len(views),
+                 "residual_m": float(np.sqrt(np.mean(np.sum(
+                     (transform_points(T_world_object, model) - world) ** 2, axis=1)))),
+                 "T_object_cam": (invert(T_world_object) @ T_world_cam).round(6).tolist(),
+                 "T_world_object_est": T_world_object.round(6).tolist()}
+        self.attempts.append(fused)
+        self.details["final"] = len(self.attempts) - 1
+        return True
 
     def step(self, observation: Observation) -> Command:
         nav = observation.nav

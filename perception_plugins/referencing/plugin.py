@@ -71,7 +71,15 @@ class StereoReferencingPlugin:
             if prior is not None:
                 ranges = (model.points @ prior[:3, :3].T + prior[:3, 3])[:, 2]
                 tolerance *= max(1.0, (float(np.max(ranges)) / REFERENCE_RANGE_M) ** 2)
-            found = reference(model.points, points, tolerance, prior)
+            candidates = points
+            if prior is not None and request.prior_radius is not None:
+                predicted = model.points @ prior[:3, :3].T + prior[:3, 3]
+                near = np.min(np.linalg.norm(points[:, None, :] - predicted[None, :, :], axis=2), axis=1)
+                candidates = points[near <= request.prior_radius]
+            if len(candidates) < 3:
+                continue
+            found = reference(model.points, candidates, tolerance, prior)
+            found_points = candidates
             if not found.recognised or found.T_cloud_model is None:
                 continue
             T = found.T_cloud_model
@@ -82,8 +90,12 @@ class StereoReferencingPlugin:
                 if shift > self.gate_m or turn > self.gate_deg:
                     refused.append(f"{model.set_id}: {shift:.1f} m / {turn:.0f} deg from the prior")
                     continue
+            model_idx = [i for i, _ in found.pairs]
+            cloud_idx = [j for _, j in found.pairs]
             result = ReferencingResult(True, model.set_id, T, found.matched, found.residual_rms, found.ambiguous,
-                                       len(points), {"method": found.method, "tolerance": tolerance})
+                                       len(points), {"method": found.method, "tolerance": tolerance,
+                                                     "candidates": len(candidates)},
+                                       model.points[model_idx], found_points[cloud_idx])
             if best is None or (result.matched, -result.residual_rms) > (best.matched, -best.residual_rms):
                 best = result
         if best is None:
