@@ -17,8 +17,8 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from mission.knowledge import Knowledge
-from mission.plugin_host import PluginHost
 from mission.language.models import Mission, RouteElement
+from mission.plugin_host import PluginHost
 from mission.vehicle import Command, NavState, Observation
 
 

@@ -41,14 +41,11 @@ from numpy.typing import NDArray
 from scipy.ndimage import gaussian_filter
 
 from mission.errors import AuvError
-from mission.frames import Array, pose_matrix
+from mission.frames import R_BODY_CAM, Array, camera_pose
 from mission.language.models import Stereo
 from mission.sim.mjworld import HIDDEN_GROUP, R_MJ_NED, SEABED_TILE_GROUP, VISUAL_GROUP, Appearance, MjWorld, ned_to_mj
 from mission.world.model import Texture, World
 from mission.world.scene import Scene, build_scene
-
-R_BODY_CAM: Array = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
-"""Camera axes (columns: x right, y down, z optical axis) in the body frame (x forward, y starboard, z down)."""
 
 
 class RenderError(AuvError):
@@ -125,16 +122,9 @@ def fovy_deg(settings: Stereo) -> float:
 
 def left_camera_pose(north: float, east: float, depth: float, heading: float, pitch: float = 0.0,
                      roll: float = 0.0, baseline: float = 0.25) -> Array:
-    """T_world_left of the down-looking rig on a vehicle at this pose (left camera at −baseline/2 on body y).
-
-    >>> T = left_camera_pose(10.0, 20.0, 50.0, 90.0, baseline=0.2)
-    >>> T[:3, 3].round(6).tolist(), T[:3, 2].round(6).tolist()
-    ([10.1, 20.0, 50.0], [0.0, 0.0, 1.0])
-    """
-    T_body_left = np.eye(4)
-    T_body_left[:3, :3] = R_BODY_CAM
-    T_body_left[:3, 3] = (0.0, -0.5 * baseline, 0.0)
-    return pose_matrix(north, east, depth, heading, pitch, roll) @ T_body_left
+    """T_world_left of the down-looking rig on a vehicle at this pose: `mission.frames.camera_pose`, the one
+    mount definition agents use too (left camera at −baseline/2 on body y)."""
+    return camera_pose(north, east, depth, heading, pitch, roll, baseline)
 
 
 def _gl_context(width: int, height: int) -> Any:
@@ -176,9 +166,9 @@ class StereoCamera:
                  degradations: Degradations | None = None, *, texture: Texture | None = None,
                  appearance: Appearance | None = None, lamp: Lamp | None = None, near_m: float = 0.1,
                  far_m: float = 200.0) -> None:
-        """`world`: a world file's model (its `seabed.texture` is used), or a scene / plain `MjWorld` (a `Scene`
-        does not know its texture: pass `texture`, else the default sand). The camera compiles its own model with
-        the appearance, sized for its images."""
+        """`world`: a world file's model, a scene or a plain `MjWorld` (the seabed texture comes from `texture`,
+        else the world's or scene's own). The camera compiles its own model with the appearance, sized for its
+        images."""
         if isinstance(world, World):
             scene, texture = build_scene(world), texture or world.seabed.texture
         elif isinstance(world, MjWorld):
@@ -194,7 +184,7 @@ class StereoCamera:
         self.near_m, self.far_m = near_m, far_m
         w, h = self.settings.width, self.settings.height
         self.world = MjWorld(scene, offscreen=(w, h), near_m=near_m, far_m=far_m,
-                             appearance=appearance or Appearance(seabed=texture or Texture()))
+                             appearance=appearance or Appearance(seabed=texture or scene.texture))
         self._rng = np.random.default_rng(self.degradations.seed)
         self._rect = mujoco.MjrRect(0, 0, w, h)
         self._gl = _gl_context(w, h)

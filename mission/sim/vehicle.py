@@ -14,9 +14,9 @@ import numpy as np
 
 from mission.language.models import Mission
 from mission.navigation import NavigationFilter
+from mission.plugin_api import StereoImages
 from mission.sim import kinematics
 from mission.sim.kinematics import TrueState
-from mission.plugin_api import StereoImages
 from mission.vehicle import HOVER_GAIN, HOVER_SPEED, Command, NavState, Observation, SonarPing
 from mission.world.scene import Scene
 
@@ -178,7 +178,8 @@ class SimulatedVehicle:
             from mission.sim.camera import StereoCamera
             from mission.sim.mjworld import mjworld_for
 
-            self.camera = StereoCamera(mjworld_for(self.scene), self.mission.sensors.stereo)
+            self.camera = StereoCamera(mjworld_for(self.scene), self.mission.sensors.stereo,
+                                       texture=self.scene.texture)
         if "stereo" in sensors:
             self.next_frame = max(self.next_frame, self.truth.time)
 

@@ -12,7 +12,7 @@ import shapely
 from shapely.geometry import MultiPoint, Polygon
 
 from mission.frames import Array, pose_matrix, transform_points
-from mission.world.model import Box, Cylinder, Part, World, WorldObject
+from mission.world.model import Box, Cylinder, Part, Texture, World, WorldObject
 from mission.world.terrain import HeightField, generate_seabed
 
 
@@ -51,6 +51,7 @@ class Scene:
     surface: HeightField
     current: tuple[float, float]
     objects: tuple[PlacedObject, ...]
+    texture: Texture = Texture()  # how the seabed looks to cameras
 
     def altitude(self, north: float, east: float, depth: float) -> float:
         """Height of a point above whatever lies under it (seabed or an object's top)."""
@@ -123,4 +124,5 @@ def build_scene(world: World) -> Scene:
         for part in obj.parts:
             _raise_surface(surface, seabed, part)
     surface_field = HeightField(surface, seabed.north0, seabed.east0, seabed.resolution)
-    return Scene(world.name, seabed, surface_field, (world.current.north, world.current.east), placed)
+    return Scene(world.name, seabed, surface_field, (world.current.north, world.current.east), placed,
+                 world.seabed.texture)
