@@ -23,6 +23,11 @@ BENCHMARKS: dict[str, str] = {
     "sonar": "mission.bench.sonar",
     "mapping": "mission.bench.mapping",
     "coverage": "mission.bench.coverage",
+    "stereo": "mission.bench.stereo",
+    "referencing": "mission.bench.referencing",
+    "ordering": "mission.bench.ordering",
+    "rrt": "mission.bench.rrt",
+    "nbv": "mission.bench.nbv",
 }
 
 BenchFn = Callable[[bool], tuple[dict[str, Any], dict[str, dict[str, Any]]]]
