@@ -62,9 +62,12 @@ def sim() -> Iterator[SimPair]:
         camera = StereoCamera(load_world(REFERENCE_WORLD), Stereo(width=1200, height=900, fx=1000.0, baseline=0.25))
     except RenderError as exc:
         pytest.skip(f"no off-screen OpenGL here: {exc}")
+    # Textured sand with the manifold's skid edge in view: the stereo code is tested on texture and depth steps;
+    # the painted object faces themselves are kept plain on purpose (their corners are the referencing features).
     manifold = next(o for o in camera.world.scene.objects if o.id == "manifold-1")
-    roof = transform_points(manifold.T_world_object, np.array([[4.6, 2.9, -2.0]]))[0]
-    frame = camera.render_at(roof[0], roof[1], roof[2] - 3.6, 40.0)
+    corner = transform_points(manifold.T_world_object, np.array([[-1.5, 2.5, 0.0]]))[0]
+    seabed = camera.world.scene.seabed.depth_at(corner[0], corner[1])
+    frame = camera.render_at(corner[0], corner[1], seabed - 3.6, 40.0)
     camera.close()
     yield SimPair(frame.left, frame.right, frame.K, frame.baseline, frame.depth_left)
 
