@@ -62,7 +62,8 @@ def test_schema_and_plugins_commands(capsys):
     schema = json.loads(capsys.readouterr().out)
     assert schema["title"].startswith("auv-mission") and "route" in schema["required"]
     assert main(["plugins"]) == 0
-    assert "no perception plug-ins installed" in capsys.readouterr().out
+    assert "stereo-referencing       perception_plugins.referencing.plugin:StereoReferencingPlugin" in \
+        capsys.readouterr().out
 
 
 def test_python_dash_m_mission_is_the_auv_command():
