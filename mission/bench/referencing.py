@@ -208,6 +208,7 @@ class _Tally:
     recognised: int = 0
     wrong_pair_cases: int = 0
     ambiguous: int = 0
+    over_budget: int = 0
     rotation_deg: list[float] | None = None
     centroid_m: list[float] | None = None
     camera_m: list[float] | None = None
@@ -220,7 +221,7 @@ class _Tally:
         self.ideal_rotation_deg = []
 
     def add(self, case: Case, pairs: list[tuple[int, int]], T: Array | None, ms: float,
-            ambiguous: bool = False) -> bool:
+            ambiguous: bool = False, exact: bool = True) -> bool:
         assert self.rotation_deg is not None and self.centroid_m is not None and self.camera_m is not None
         assert self.origin_m is not None and self.ms is not None
         correct, wrong = score_pairs(pairs, case.truth)
@@ -230,6 +231,7 @@ class _Tally:
         self.recognised += len(pairs) >= 3
         self.wrong_pair_cases += wrong > 0
         self.ambiguous += ambiguous
+        self.over_budget += not exact
         self.ms.append(ms)
         if ok and T is not None:
             angle, camera = pose_errors(T, case.T_cloud_model)
@@ -253,6 +255,7 @@ class _Tally:
             "recognised_percent": round(100.0 * self.recognised / n, 2),
             "cases_with_a_wrong_pair": self.wrong_pair_cases,
             "ambiguous_cases": self.ambiguous,
+            "cases_stopped_by_the_time_budget": self.over_budget,
             "rotation_error_deg": _stats(self.rotation_deg, digits=3),
             "rotation_error_of_least_squares_on_all_true_pairs_deg": _stats(self.ideal_rotation_deg or [], digits=3),
             "translation_error_at_model_centroid_cm": _stats(self.centroid_m, 100.0, 2),
@@ -276,8 +279,9 @@ def _ours(cases: list[tuple[int, int, Case]]) -> tuple[_Tally, dict[tuple[int, i
         t0, c0 = time.perf_counter(), time.process_time()
         result = reference(case.model, case.cloud, TOLERANCE)
         wall, cpu = 1000 * (time.perf_counter() - t0), 1000 * (time.process_time() - c0)
-        overall.add(case, result.pairs, result.T_cloud_model, wall, result.ambiguous)
-        by_size.setdefault((n, m), _Tally()).add(case, result.pairs, result.T_cloud_model, wall, result.ambiguous)
+        overall.add(case, result.pairs, result.T_cloud_model, wall, result.ambiguous, result.exact)
+        by_size.setdefault((n, m), _Tally()).add(case, result.pairs, result.T_cloud_model, wall, result.ambiguous,
+                                                 result.exact)
         if (n, m) == (20, 500):
             cpu_n20_m500.append(cpu)
     return overall, by_size, cpu_n20_m500
@@ -398,7 +402,8 @@ def run(quick: bool) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:
         "ours": ours,
         "ours_by_size": [{"N": n, "M": m, **{k: v for k, v in t.summary().items()
                                              if k in ("cases", "success_percent", "cases_with_a_wrong_pair",
-                                                      "ambiguous_cases", "time_ms")}}
+                                                      "ambiguous_cases", "cases_stopped_by_the_time_budget",
+                                                      "time_ms")}}
                          for (n, m), t in sorted(by_size.items())],
         "extra_n20_m500_cases_success_percent": timed.summary()["success_percent"],
         "median_ms_n20_m500": {"cpu": round(median_cpu, 1), "wall": round(median_ms, 1),

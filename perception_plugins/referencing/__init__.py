@@ -3,7 +3,13 @@ coherence (pairwise-distance consistency) in a 3D cloud, then the least-squares 
 
 Public API (fixed for users and benchmarks): `identify`, `reference` (with its `Referencing` result),
 `rigid_transform`; the paper's exponential search is `exhaustive_identify`, kept as a test oracle. Pure numpy
-and scipy: it imports neither `mission` nor `planners` nor the simulator.
+and scipy: the algorithm imports neither `mission` nor `planners` nor the simulator (only the plug-in adapter,
+`plugin.py`, does, and this package does not import it).
+
+Modules: `consistency` (distances, the consistency graph, signature pruning), `anchors` (the polynomial descent
+over subset sizes by anchor triangles), `placements` (scoring and refining the placements they give), `clique`
+(exact and polynomial maximum cliques), `transform` (Kabsch and its robust refinement), `identification` (the
+pipeline and the API), `exhaustive` (the seed's search).
 """
 
 from perception_plugins.referencing.exhaustive import exhaustive_identify

@@ -150,7 +150,7 @@ def search_placements(model: Array, cloud: Array, tolerance: float, model_distan
     at least `best` points has been met, or (best − slack) points while best < SLACK_BELOW: in a dense cloud a
     chance set can be one point larger than a small true one, and the MSAC score must then choose. Finally the
     best placements are polished (`placements.local_optimise`)."""
-    t0 = time.perf_counter()
+    t0 = time.thread_time()
     n_model = len(model)
     order = farthest_point_order(model)
     scored = order[: min(SCORED_POINTS, n_model)]
@@ -200,7 +200,7 @@ def search_placements(model: Array, cloud: Array, tolerance: float, model_distan
             for placement in placements_of(tri, copies, model, cloud, tolerance, scored, grid, tree,
                                            needed=out.best - slack, known=known):
                 add(placement)
-            if time.perf_counter() - t0 > budget_s:
+            if time.thread_time() - t0 > budget_s:
                 break
         else:
             if out.best - (slack if out.best < SLACK_BELOW else 0) >= level or level == 3:

@@ -5,7 +5,8 @@ largest coherent subset is a maximum clique. Three searches:
 
 - `maximum_cliques`: exact branch and bound (Tomita's MCQ: greedy colouring gives the bound, vertices are
   expanded in colour order) returning *every* clique of the maximum size, since symmetric point sets have
-  several. Exponential in the worst case, so a time budget guards it and the result says whether it finished.
+  several. Exponential in the worst case, so a time budget (CPU seconds of the calling thread) guards it and the
+  result says whether it finished.
 - `maximal_cliques`: Bron–Kerbosch with pivoting and the same colouring bound, every maximal clique of at least
   `min_size` vertices (used when the largest cliques fail the rigid check), equally guarded.
 - `dense_clique`: the polynomial fallback in the spirit of CLIPPER (Lusk et al., 2021): the leading eigenvector
@@ -86,10 +87,10 @@ def maximum_cliques(adjacency: BoolMatrix, budget_s: float = 1.0, lower_bound: i
     nbrs = _bitsets(adjacency)
     best: list[list[int]] = []
     size = [max(0, lower_bound)]
-    deadline = time.perf_counter() + budget_s
+    deadline = time.thread_time() + budget_s
 
     def expand(clique: list[int], candidates: int) -> None:
-        if time.perf_counter() > deadline:
+        if time.thread_time() > deadline:
             raise _Budget
         order, colours = _colour_order(candidates, nbrs)
         for idx in range(len(order) - 1, -1, -1):
@@ -118,10 +119,10 @@ def maximal_cliques(adjacency: BoolMatrix, min_size: int = 3, budget_s: float = 
     """Every maximal clique with at least `min_size` vertices, largest first (Bron–Kerbosch, pivot, colour bound)."""
     nbrs = _bitsets(adjacency)
     found: list[list[int]] = []
-    deadline = time.perf_counter() + budget_s
+    deadline = time.thread_time() + budget_s
 
     def extend(clique: list[int], candidates: int, excluded: int) -> None:
-        if time.perf_counter() > deadline:
+        if time.thread_time() > deadline:
             raise _Budget
         if not candidates:
             if not excluded and len(clique) >= min_size:

@@ -105,10 +105,11 @@ def identify(model_points: Array, cloud_points: Array, tolerance: float) -> list
 
 
 def reference(model_points: Array, cloud_points: Array, tolerance: float,
-              prior_T_cloud_model: Array | None = None, budget_s: float = 2.0) -> Referencing:
+              prior_T_cloud_model: Array | None = None, budget_s: float = 3.0) -> Referencing:
     """Identify the model's points in the cloud and compute T_cloud_model (see the module docstring).
 
-    `budget_s` bounds the searches; past it the best found so far is used and `exact` is False.
+    `budget_s` bounds the searches in CPU seconds of the calling thread (so that a loaded machine does not
+    change the result); past it the best found so far is used and `exact` is False.
     """
     model = _points(model_points, "model_points")
     cloud = _points(cloud_points, "cloud_points")

@@ -2,9 +2,9 @@
 refined rigid placements with their pairs.
 
 A copy fixes a proper transform; copies are ranked by how many model points land on cloud points (a dilated
-occupancy grid for thousands of copies, exact distances for the best few dozen), the best are refined by
-gathering and refitting with a shrinking radius, and the final best are given a local optimisation that lets a
-placement leave a wrong basin (LO-RANSAC). Scores are MSAC scores of the residuals.
+occupancy grid for thousands of copies; for the best few dozen, one batched gather-and-refit step and exact
+distances), the best are refined by gathering and refitting with a shrinking radius, and the final best are
+given a local optimisation that lets a placement leave a wrong basin (LO-RANSAC). Scores are MSAC scores.
 """
 
 from __future__ import annotations
@@ -30,9 +30,12 @@ Array = NDArray[np.float64]
 Index = NDArray[np.int64]
 
 REFINED_PER_TRIANGLE = 3          # copies of an anchor triangle refined into placements
-FIRST_STAGE = 6                   # model points that score every congruent copy (on the grid),
-SECOND_STAGE = 256                # copies that the rest of the scored points then score (on the grid),
-THIRD_STAGE = 48                  # copies then scored by exact distances of every model point
+# Ranking stages, (sparse, dense): a dense cloud (more than DENSE_COPIES copies of a triangle) makes chance
+# copies hit as often as the true one on a few points, so it needs more points and longer shortlists.
+DENSE_COPIES = 5000
+FIRST_STAGE = (6, 10)             # model points that score every congruent copy (on the grid),
+SECOND_STAGE = (256, 512)         # copies that the rest of the scored points then score (on the grid),
+THIRD_STAGE = (48, 64)            # copies then refitted once and scored by exact distances of every model point
 LO_TRIPLES = 256                  # triples of candidate pairs tried by the local optimisation
 
 
@@ -90,7 +93,7 @@ def _gather(model: Array, tree: cKDTree, T: Array, radius: float) -> Index:
 
 
 def refine(model: Array, cloud: Array, tree: cKDTree, T: Array, tolerance: float, needed: int
-            ) -> Placement | None:
+           ) -> Placement | None:
     """Gather the pairs a coarse placement predicts and refit, with a radius shrinking from 3·tolerance to the
     tolerance, until the pairs no longer change; then fit robustly and keep the pairs within tolerance.
     Gives up as soon as fewer than `needed` pairs are gathered."""
@@ -113,7 +116,7 @@ def refine(model: Array, cloud: Array, tree: cKDTree, T: Array, tolerance: float
 
 
 def local_optimise(model: Array, cloud: Array, tree: cKDTree, placement: Placement, tolerance: float
-                    ) -> Placement | None:
+                   ) -> Placement | None:
     """Escape a wrong basin of the refinement (a placement that leaned onto a nearby outlier): the two nearest
     cloud points within 3·tolerance of each placed model point are candidate pairs, every triple of them (at
     most LO_TRIPLES) gives a proper transform, and the one placing the model best (MSAC score of the model points'
@@ -155,9 +158,10 @@ def placements_of(tri: tuple[int, int, int], copies: Index, model: Array, cloud:
     """The best-supported placements that the congruent copies (h, 3) of the model triangle `tri` give.
 
     Copies are ranked in three stages, each on fewer of them: grid hits of a few spread model points (of
-    `scored`), grid hits of the rest of `scored`, then exact distances of every model point (an MSAC score
-    within 2·tolerance, since a triangle's transform is rough far from it). The best few are refined, unless
-    they cannot reach `needed` pairs or a placement in `known` (transforms) already puts the model there.
+    `scored`), grid hits of the rest of `scored`, then, after one refit on the pairs within 2·tolerance (a
+    triangle's transform is rough far from it), the MSAC score of every model point's distance to the cloud.
+    The best few are refined, unless they cannot reach `needed` pairs or a placement in `known` (transforms)
+    already puts the model there.
     """
     if len(copies) == 0:
         return []
@@ -165,12 +169,13 @@ def placements_of(tri: tuple[int, int, int], copies: Index, model: Array, cloud:
     others = np.array([k for k in scored.tolist() if k not in tri], dtype=np.int64)
     rank = np.arange(len(copies))
     if len(others):
-        first = others[:FIRST_STAGE]
+        dense = int(len(copies) > DENSE_COPIES)
+        first = others[:FIRST_STAGE[dense]]
         score = grid.near(_moved(rot, t, model[first])).sum(axis=1)
-        rank = np.argsort(-score, kind="stable")[:SECOND_STAGE]
+        rank = np.argsort(-score, kind="stable")[:SECOND_STAGE[dense]]
         if len(others) > len(first):
             score = score[rank] + grid.near(_moved(rot[rank], t[rank], model[others[len(first):]])).sum(axis=1)
-            rank = rank[np.argsort(-score, kind="stable")[:THIRD_STAGE]]
+            rank = rank[np.argsort(-score, kind="stable")[:THIRD_STAGE[dense]]]
     # one gather-and-refit step for the best copies, all at once: their MSAC scores at the tolerance then
     # tell a placement that fits at the noise level from chance ones far better than the rough copy does
     d, j = tree.query(_moved(rot[rank], t[rank], model).reshape(-1, 3), distance_upper_bound=2.0 * tolerance)
