@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mission.bench.referencing_images import run_images
 from mission.bench import check
+from mission.bench.referencing_images import run_images
 
 Array = NDArray[np.float64]
 

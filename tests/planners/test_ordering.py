@@ -174,10 +174,9 @@ def test_heuristic_keeps_deep_precedence_chains():
 
 def test_precedence_search_improves_on_its_nearest_feasible_start():
     from planners.ordering.construct import nearest_feasible_path
-    from planners.ordering.tsp import _precedence_lists
 
     cost, prec = sets_and_targets(100, 4, nearest=True)
-    need, _ = _precedence_lists(100, 0, prec)
+    need = [[s for s, t in prec if t == v] for v in range(100)]
     first = tour_cost(nearest_feasible_path(cost, 0, need), cost, False)
     assert solve_precedence(cost, 0, prec, seed=0, effort=0.3).cost < 0.95 * first
 
