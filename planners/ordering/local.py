@@ -1,0 +1,295 @@
+"""Local search for closed tours (the plain visiting-order problem of seed 002 §3.4): sequential 2-opt and 3-opt
+moves in the Lin–Kernighan manner (take an edge out, put a shorter one in from its end, keep the running gain
+positive), chained up to `depth` 3-opt moves deep, over neighbour lists with don't-look bits, and the double-bridge
+kick of an iterated local search.
+
+The tour is an array with positions; every move is made of reversals (2-opt flips), logged so that a chain that
+ends worse, or a rejected kick, is undone by replaying the log backwards. Pure Python on lists: a move reads a
+handful of numbers, where numpy's per-call overhead would dominate. Symmetric costs only.
+"""
+
+from __future__ import annotations
+
+import random
+import time
+from collections import deque
+from collections.abc import Iterable, Sequence
+
+EPS = 1e-9
+Move = tuple[int, int, int, int, int, int, int]
+
+
+class ClosedTour:
+    """A closed tour `order` under moves; `cost[a][b]` as nested lists, `neighbours[a]` nearest first.
+
+    `breadth` caps the candidates tried for the first and second added edge of a 3-opt move; `depth` is the
+    longest chain of 3-opt moves tried from one stop."""
+
+    def __init__(self, cost: list[list[float]], neighbours: Sequence[Sequence[int]], order: Sequence[int],
+                 breadth: tuple[int, int] = (6, 5), depth: int = 4) -> None:
+        self.cost = cost
+        self.n = len(order)
+        self.near = [list(nb[:breadth[0]]) for nb in neighbours]
+        self.near5 = [list(nb[:breadth[1]]) for nb in neighbours]
+        self.depth = depth
+        self.order = list(order)
+        self.pos = [0] * self.n
+        for i, v in enumerate(self.order):
+            self.pos[v] = i
+        self.log: list[tuple[int, int]] = []
+        self.queued = bytearray(self.n)
+
+    def length(self) -> float:
+        c, t = self.cost, self.order
+        return sum(c[t[i - 1]][t[i]] for i in range(self.n))
+
+    # -- reversals -------------------------------------------------------------------------------------------
+    def _reverse(self, i: int, j: int) -> None:
+        """Reverse positions i..j (cyclic); the shorter side is reversed, which gives the same cycle."""
+        n = self.n
+        if 2 * ((j - i) % n + 1) > n:
+            i, j = (j + 1) % n, (i - 1) % n
+        self.log.append((i, j))
+        self._raw_reverse(i, j)
+
+    def _raw_reverse(self, i: int, j: int) -> None:
+        t, pos, n = self.order, self.pos, self.n
+        if i <= j:
+            seg = t[i:j + 1]
+            seg.reverse()
+            t[i:j + 1] = seg
+            for k in range(i, j + 1):
+                pos[t[k]] = k
+            return
+        for _ in range(((j - i) % n + 1) // 2):
+            a, b = t[i], t[j]
+            t[i] = b
+            pos[b] = i
+            t[j] = a
+            pos[a] = j
+            i = i + 1 if i + 1 < n else 0
+            j = j - 1 if j > 0 else n - 1
+
+    def flip(self, a: int, b: int, c: int, d: int) -> None:
+        """Replace edges {a, b} and {c, d} by {a, c} and {b, d}; the cycle reads a b … c d one way or the other."""
+        if self.order[(self.pos[a] + 1) % self.n] == b:
+            self._reverse(self.pos[b], self.pos[c])
+        else:
+            self._reverse(self.pos[c], self.pos[b])
+
+    def mark(self) -> int:
+        return len(self.log)
+
+    def undo(self, mark: int = 0) -> None:
+        log = self.log
+        while len(log) > mark:
+            i, j = log.pop()
+            self._raw_reverse(i, j)
+
+    # -- moves -----------------------------------------------------------------------------------------------
+    def search(self, t1: int, t2_only: int, gain: float, added: set[tuple[int, int]]) -> tuple[float, Move | None,
+                                                                                                float, Move | None]:
+        """The best sequential 2- or 3-opt move that removes an edge (t1, t2) and closes back at t1, and the best
+        3-opt move left open (its last removed edge not yet closed) for the chain to go on from.
+
+        t2 is next to t1 on the tour (either way round, `dr`; only `t2_only` if ≥ 0, when the removed edge's
+        worth is `gain` instead of its length); t3 is a near neighbour of t2 with a positive running gain; t4 is
+        next to t3: t4 before t3 closes as a 2-opt or goes on to t5 (near t4) and t6 on the side that keeps one
+        cycle; t4 after t3 needs t5 between t2 and t3 (a segment exchange, both segments kept or reversed).
+        Edges in `added` (put in earlier in the chain) are not taken out again.
+        Returns (gain, move, open gain, open move); a gain is the length removed minus the length added.
+        """
+        D, t, pos, n, near, near5 = self.cost, self.order, self.pos, self.n, self.near, self.near5
+        Dt1 = D[t1]
+        p1 = pos[t1]
+        best = EPS
+        move: Move | None = None
+        best_open = 0.0
+        open_move: Move | None = None
+        for dr in (1, -1):
+            t2 = t[(p1 + dr) % n]
+            if t2_only >= 0 and t2 != t2_only:
+                continue
+            d12 = gain if t2_only >= 0 else Dt1[t2]
+            p2 = pos[t2]
+            Dt2 = D[t2]
+            for t3 in near[t2]:
+                g1 = d12 - Dt2[t3]
+                if g1 <= 0.0:
+                    break
+                if t3 == t1:
+                    continue
+                p3 = pos[t3]
+                o3 = ((p3 - p2) * dr) % n
+                Dt3 = D[t3]
+                t4 = t[(p3 - dr) % n]
+                if t4 != t2 and not (added and ((t3, t4) in added or (t4, t3) in added)):
+                    g2 = g1 + Dt3[t4]
+                    g = g2 - Dt1[t4]
+                    if g > best:
+                        best, move = g, (0, t1, t2, t3, t4, 0, 0)
+                    Dt4 = D[t4]
+                    for t5 in near5[t4]:
+                        g3 = g2 - Dt4[t5]
+                        if g3 <= best:
+                            break
+                        if t5 == t3 or t5 == t1:
+                            continue
+                        p5 = pos[t5]
+                        if ((p5 - p2) * dr) % n < o3 - 1:
+                            t6 = t[(p5 + dr) % n]
+                            if t6 == t4:
+                                continue
+                        else:
+                            t6 = t[(p5 - dr) % n]
+                        if added and ((t5, t6) in added or (t6, t5) in added):
+                            continue
+                        g4 = g3 + D[t5][t6]
+                        g = g4 - Dt1[t6]
+                        if g > best:
+                            best, move = g, (1, t1, t2, t3, t4, t5, t6)
+                        elif g4 > best_open:
+                            best_open, open_move = g4, (1, t1, t2, t3, t4, t5, t6)
+                t4 = t[(p3 + dr) % n]
+                if t4 != t1 and not (added and ((t3, t4) in added or (t4, t3) in added)):
+                    g2 = g1 + Dt3[t4]
+                    Dt4 = D[t4]
+                    for t5 in near5[t4]:
+                        g3 = g2 - Dt4[t5]
+                        if g3 <= best:
+                            break
+                        p5 = pos[t5]
+                        if ((p5 - p2) * dr) % n >= o3:
+                            continue
+                        t6 = t[(p5 + dr) % n]
+                        if not (added and ((t5, t6) in added or (t6, t5) in added)):
+                            g4 = g3 + D[t5][t6]
+                            g = g4 - Dt1[t6]
+                            if g > best:
+                                best, move = g, (2, t1, t2, t3, t4, t5, t6)
+                            elif g4 > best_open:
+                                best_open, open_move = g4, (2, t1, t2, t3, t4, t5, t6)
+                        if t5 != t2:
+                            t6 = t[(p5 - dr) % n]
+                            if not (added and ((t5, t6) in added or (t6, t5) in added)):
+                                g4 = g3 + D[t5][t6]
+                                g = g4 - Dt1[t6]
+                                if g > best:
+                                    best, move = g, (3, t1, t2, t3, t4, t5, t6)
+                                elif g4 > best_open:
+                                    best_open, open_move = g4, (3, t1, t2, t3, t4, t5, t6)
+        return best, move, best_open, open_move
+
+    def improve(self, t1: int) -> tuple[float, list[int]] | None:
+        """Make an improving move from t1 if one is found: a 2- or 3-opt move, or a chain of up to `depth` 3-opt
+        moves (Lin–Kernighan: each open move is made and the search goes on from its loose end, the running
+        gain kept positive) that ends better than it started. Returns the gain and the stops touched."""
+        gain, move, open_gain, open_move = self.search(t1, -1, 0.0, set())
+        if move is not None:
+            self.apply(move)
+            return gain, list(move[1:5] if move[0] == 0 else move[1:])
+        if self.depth < 2 or open_move is None:
+            return None
+        mark = self.mark()
+        added: set[tuple[int, int]] = set()
+        touched: list[int] = []
+        for _ in range(1, self.depth):
+            if open_move is None:
+                break
+            self.apply(open_move)
+            _, _, t2, t3, t4, t5, t6 = open_move
+            added.add((t2, t3))
+            added.add((t4, t5))
+            touched.extend(open_move[1:])
+            gain, move, open_gain, open_move = self.search(t1, t6, open_gain, added)
+            if move is not None:
+                self.apply(move)
+                touched.extend(move[1:5] if move[0] == 0 else move[1:])
+                return gain, touched
+        self.undo(mark)
+        return None
+
+    def apply(self, move: Move) -> None:
+        kind, t1, t2, t3, t4, t5, t6 = move
+        if kind == 0:
+            self.flip(t2, t1, t3, t4)
+        elif kind == 1:
+            self.flip(t2, t1, t3, t4)
+            self.flip(t1, t4, t6, t5)
+        elif kind == 2:
+            self.flip(t1, t2, t3, t4)
+            self.flip(t1, t3, t6, t5)
+            self.flip(t3, t5, t2, t4)
+        else:
+            self.flip(t1, t2, t6, t5)
+            self.flip(t2, t5, t3, t4)
+
+    def optimise(self, start: Iterable[int]) -> float:
+        """Improve until no move from a queued stop gains (don't-look bits: a stop is queued again only when
+        one of its tour edges changes). Returns the total gain."""
+        queued = self.queued
+        todo: deque[int] = deque()
+        for v in start:
+            if not queued[v]:
+                queued[v] = 1
+                todo.append(v)
+        total = 0.0
+        while todo:
+            a = todo.popleft()
+            queued[a] = 0
+            found = self.improve(a)
+            if found is None:
+                continue
+            gain, touched = found
+            total += gain
+            for v in touched:
+                if not queued[v]:
+                    queued[v] = 1
+                    todo.append(v)
+        return total
+
+    def double_bridge(self, i: int, l1: int, l2: int, l3: int) -> tuple[float, list[int]]:
+        """The double-bridge kick on the three segments of lengths l1, l2, l3 after position i (A B C → C B A
+        between their neighbours, no segment reversed). Returns the cost change and the stops touched."""
+        t, n, D = self.order, self.n, self.cost
+        p2, p3, p4 = i + l1, i + l1 + l2, i + l1 + l2 + l3
+        a, b, c, d = t[i % n], t[(i + 1) % n], t[p2 % n], t[(p2 + 1) % n]
+        e, f, g, h = t[p3 % n], t[(p3 + 1) % n], t[p4 % n], t[(p4 + 1) % n]
+        delta = (D[a][f] + D[g][d] + D[e][b] + D[c][h]) - (D[a][b] + D[c][d] + D[e][f] + D[g][h])
+        self.flip(a, b, g, h)
+        self.flip(a, g, f, e)
+        self.flip(g, e, d, c)
+        self.flip(e, c, b, h)
+        return delta, [a, b, c, d, e, f, g, h]
+
+
+def iterated_local_search(tour: ClosedTour, rng: random.Random, kicks: int, max_segment: int,
+                          deadline: float | None = None, fixed: tuple[int, int] | None = None) -> float:
+    """Kick (double bridge with segments of 1…`max_segment` stops at a random place), re-optimise around the
+    kick, keep the result if it is no worse, else undo; `kicks` times or until `deadline` (perf_counter).
+    An edge `fixed` is never kicked out. Returns the total gain over the starting tour."""
+    n = tour.n
+    total = tour.optimise(range(n))
+    tour.log.clear()
+    if n < 8:
+        return total
+    span = max(1, min(max_segment, (n - 2) // 3))
+    fix = set(fixed) if fixed is not None else set()
+    for k in range(kicks):
+        if deadline is not None and (k & 15) == 0 and time.perf_counter() > deadline:
+            break
+        i = rng.randrange(n)
+        l1, l2, l3 = rng.randint(1, span), rng.randint(1, span), rng.randint(1, span)
+        if fix:
+            t = tour.order
+            cuts = (i, i + l1, i + l1 + l2, i + l1 + l2 + l3)
+            if any({t[p % n], t[(p + 1) % n]} == fix for p in cuts):
+                continue
+        delta, touched = tour.double_bridge(i, l1, l2, l3)
+        change = delta - tour.optimise(touched)
+        if change <= EPS:
+            total -= change
+            tour.log.clear()
+        else:
+            tour.undo()
+    return total
