@@ -66,6 +66,18 @@ def test_unknown_space_can_count_as_an_obstacle_or_be_forbidden():
     assert free.at(p) == pytest.approx([math.sqrt(10.0), math.sqrt(13.0)])
 
 
+def test_clearance_grid_from_a_voxel_map_reads_its_occupied_free_and_unknown_voxels():
+    from planners.occupancy import VoxelMap
+
+    vm = VoxelMap(1.0)
+    vm.insert_scan([0.5, 2.5, 2.5], [[7.5, 2.5, 2.5]])  # free along north 0–7, occupied at 7
+    grid = ClearanceGrid.from_voxel_map(vm, (0, 0, 0), (10, 5, 5), unknown="forbid")
+    assert grid.shape == (10, 5, 5)
+    along = grid.distance[:, 2, 2]
+    assert along[7] == 0.0 and along[5] == 1.0 and along[3] == 3.0  # box distances to the occupied voxel
+    assert grid.distance[3, 0, 0] == 0.0  # never observed: forbidden
+
+
 def test_dubins_path_respects_the_turning_radius_and_the_safety_distance():
     occ = wall_grid()
     grid = ClearanceGrid.from_occupancy(occ, (0, 0, 0), CELL)
