@@ -1,0 +1,121 @@
+"""The next-best-view planner an explore agent drives step by step (seed 002 §2.2.2, Fig. 6).
+
+The seed's cycle: put the vehicle at a safe starting pose; at each view the scan goes into the voxel model;
+candidates are generated near the safe trajectory, in safe free space; their visibility and utility are
+computed; the vehicle moves to the best along a safe route (RRT) and scans again. `NbvPlanner` holds the map and
+does the middle of that cycle:
+
+* `integrate(scan)`: Bayes (log-odds) update of the `VoxelMap`, refresh of the dense state window and of the
+  safety grid (clearance from occupied and unknown voxels, for candidates and the RRT between views);
+* `propose(pose)`: candidates → visibility → utility → the best view, or None when no candidate would reveal at
+  least `min_unknown` unknown voxels (nothing left worth a move);
+* `reject(view)`: the agent could not reach a proposed view; candidates near it are skipped from then on.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from planners.nbv.candidates import candidate_views
+from planners.nbv.derived import DerivedMaps
+from planners.nbv.grid import StateGrid
+from planners.nbv.utility import ViewTerms, Weights, view_utility
+from planners.nbv.views import Scanner, View, Views
+from planners.occupancy import VoxelMap
+from planners.rrt import ClearanceGrid
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Scan:
+    """One scanner frame: beams from `origin` to `endpoints` (N, 3); `hit` False where a beam returned nothing
+    (its endpoint is then at the maximum range)."""
+
+    origin: Array
+    endpoints: Array
+    hit: NDArray[np.bool_]
+
+
+@dataclass
+class Proposal:
+    """What the last `propose` looked at (for plots and logs)."""
+
+    candidates: Views
+    terms: ViewTerms | None
+    chosen: int
+    seconds: float
+
+
+@dataclass
+class NbvPlanner:
+    """Next-best-view scanning with the seed's utility over a voxel map, inside the box [lo, hi]."""
+
+    voxel_map: VoxelMap
+    lo: ArrayLike
+    hi: ArrayLike
+    scanner: Scanner
+    weights: Weights = field(default_factory=Weights)
+    safe_distance: float = 5.0
+    candidates: int = 200
+    band: float | None = None
+    min_overlap: float = 0.1
+    min_unknown: int = 20
+    candidate_rounds: int = 40
+    """Sampling rounds (8 × `candidates` draws each) before settling for fewer candidates."""
+    safety_cell: float | None = None
+    """Safety-grid block size (m); default max(0.5, 2 voxels)."""
+    seed: int | None = None
+    last: Proposal | None = None
+    grid: StateGrid = field(init=False)
+    derived: DerivedMaps = field(init=False)
+    rejected: list[Array] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.grid = StateGrid.over(self.voxel_map, self.lo, self.hi)
+        self.derived = DerivedMaps(self.grid, self.safety_cell or max(0.5, 2.0 * self.grid.resolution))
+        self.rng = np.random.default_rng(self.seed)
+
+    @property
+    def safety(self) -> ClearanceGrid:
+        """Clearance from occupied and (mostly) unknown space, for candidates and the paths between views."""
+        return self.derived.safety
+
+    def integrate(self, scan: Scan) -> None:
+        """Fuse one scan into the map (free along beams, occupied at returns), the dense window and the safety
+        grid (clearance from occupied and unknown voxels)."""
+        self.voxel_map.insert_scan(scan.origin, scan.endpoints, scan.hit, max_range=self.scanner.max_range)
+        box = self.grid.refresh(self.voxel_map, scan.origin, scan.endpoints)
+        if box is not None:
+            self.derived.update(*box)
+
+    def propose(self, pose: View) -> View | None:
+        """The next best view from `pose`, or None when no candidate would reveal `min_unknown` voxels."""
+        t0 = time.perf_counter()
+        contour = self.derived.contour_ids()
+        views = candidate_views(self.grid, self.safety, pose.point, self.scanner, count=self.candidates,
+                                safe_distance=self.safe_distance, band=self.band, rng=self.rng, contour=contour,
+                                max_rounds=self.candidate_rounds)
+        if self.rejected and len(views):
+            near = np.min(np.linalg.norm(views.positions[:, None, :] - np.asarray(self.rejected)[None], axis=2),
+                          axis=1)
+            views = views.select(near > self.grid.resolution * 2.0)
+        if not len(views):
+            self.last = Proposal(views, None, -1, time.perf_counter() - t0)
+            return None
+        terms = view_utility(self.grid, views, pose.point, self.scanner, self.weights, min_overlap=self.min_overlap,
+                             contour=contour)
+        # A view that would reveal nothing and follow no contour is not worth the move, however near it is.
+        best = int(np.argmax(np.where((terms.f > 0) | (terms.ct > 0), terms.u, -1.0)))
+        self.last = Proposal(views, terms, best, time.perf_counter() - t0)
+        if terms.f.max() < self.min_unknown:
+            return None
+        return views[best]
+
+    def reject(self, view: View) -> None:
+        """Mark a proposed view as unreachable."""
+        self.rejected.append(view.point)
