@@ -2,8 +2,8 @@
 rendered stereo pairs, against the truth of the world where manifold-1 lies metres off its database pose."""
 
 import pytest
-
 from conftest import MISSIONS
+
 from mission import load_mission, simulate
 
 

@@ -46,7 +46,8 @@ def run_images(quick: bool) -> dict[str, Any]:
         dn, de = rng.uniform(-0.2, 0.2, 2)
         frame = camera.render_at(roof[0] + dn, roof[1] + de, top - 3.6, heading + rng.uniform(-2, 2))
         T_true = invert(frame.T_world_left) @ manifold.T_world_object
-        prior = T_true @ pose_matrix(*rng.normal(0, 0.1, 3), rng.normal(0, 1.0))
+        dx, dy, dz = (float(v) for v in rng.normal(0.0, 0.1, 3))
+        prior = T_true @ pose_matrix(dx, dy, dz, float(rng.normal(0.0, 1.0)))
         request = ReferencingRequest((PointSetModel("manifold-1", "module-top", MODULE_TOP),), prior, 0.05, 0.4)
         t0 = time.process_time()
         result = plugin.process(StereoImages(0.0, frame.left, frame.right, frame.K, frame.baseline), request)
