@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -124,7 +125,8 @@ def _sample_ids(origin_v: NDArray[np.float32], dirs: NDArray[np.float32], t: NDA
     return flat
 
 
-def _distinct_per_group(ids: NDArray[np.int64], counts: IntArray, scratch: NDArray[np.int32]) -> IntArray:
+def _distinct_per_group(ids: NDArray[np.integer[Any]], counts: NDArray[np.integer[Any]],
+                        scratch: NDArray[np.int32]) -> IntArray:
     """Distinct values in each consecutive group of `ids` (group g has `counts[g]` entries)."""
     out = np.zeros(len(counts), dtype=np.int64)
     ends = np.cumsum(counts)
