@@ -198,7 +198,15 @@ class Executive:
                                     reason=f"no agent for kind '{element.kind}'")
                 self.emit("element_failed", nav.time, element=element.id, kind=element.kind, reason=rep.reason)
             else:
-                rep = self._run(element.id, element.kind, factory(), element, aborting=False)
+                try:
+                    agent = factory()
+                except Exception as exc:  # a broken agent class fails its element, not the executive
+                    agent = None
+                    rep = ElementReport(element.id, element.kind, "failed", nav.time, nav.time,
+                                        reason=f"agent could not be created: {exc!r}")
+                    self.emit("element_failed", nav.time, element=element.id, kind=element.kind, reason=rep.reason)
+                if agent is not None:
+                    rep = self._run(element.id, element.kind, agent, element, aborting=False)
             self.report.elements.append(rep)
             if rep.status == "aborted":
                 abort_reason = "; ".join(v["message"] for v in self.report.violations[-3:])

@@ -53,10 +53,27 @@ def test_an_agent_that_cannot_start_is_a_failed_element(write_mission):
         def start(self, context):
             raise ValueError("no plan")
 
+        def step(self, observation):
+            raise AssertionError("never called: start failed")
+
     mission = load_mission(write_mission("nostart", ROUTE))
     report, events = run_with(mission, {"transit": Broken})
     assert [e.status for e in report.elements] == ["failed", "failed"]
     assert events[-1]["event"] == "mission_finished" and events[-1]["completed"] is False
+
+
+def test_an_agent_class_that_cannot_be_built_fails_its_element_only(write_mission):
+    class Incomplete(Agent):  # no step(): abstract, cannot be instantiated
+        kind = "transit"
+
+        def start(self, context):
+            return None
+
+    mission = load_mission(write_mission("incomplete", ROUTE))
+    report, events = run_with(mission, {"transit": Incomplete})
+    assert [e.status for e in report.elements] == ["failed", "failed"]
+    assert "could not be created" in report.elements[0].reason
+    assert events[-1]["event"] == "mission_finished"
 
 
 def test_events_are_on_disk_as_soon_as_they_are_emitted(tmp_path):

@@ -11,6 +11,7 @@ The executive owns the loop. An agent implements five calls:
 
 from __future__ import annotations
 
+import abc
 import enum
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -40,8 +41,9 @@ class AgentContext:
     plugins: PluginHost | None = None
 
 
-class Agent:
-    """Base class with no-op defaults; subclasses set `kind` and implement `start` and `step`."""
+class Agent(abc.ABC):
+    """Base class with no-op defaults for `planned_path` and `stop`; subclasses set `kind` and implement the
+    two abstract calls, `start` and `step`."""
 
     kind: ClassVar[str] = ""
 
@@ -52,11 +54,13 @@ class Agent:
         self.payload: frozenset[str] = frozenset()  # payload sensors the agent needs on now ("mbes", "stereo")
         self.details: dict[str, Any] = {}  # element results for metrics (agent-specific)
 
+    @abc.abstractmethod
     def start(self, context: AgentContext) -> None:
-        raise NotImplementedError
+        """Plan from the estimated state in `context`; called once when the element begins."""
 
+    @abc.abstractmethod
     def step(self, observation: Observation) -> Command:
-        raise NotImplementedError
+        """The autopilot setpoints for this tick."""
 
     def planned_path(self) -> list[tuple[float, float]]:
         return []

@@ -26,17 +26,16 @@ from planners.nbv.candidates import is_safe_view
 from planners.nbv.derived import DerivedMaps
 from planners.nbv.explore import segment_safe
 from planners.nbv.grid import FREE, StateGrid
-from planners.nbv.planner import Scan
+from planners.nbv.mapping import MapKeeping
 from planners.nbv.views import Scanner, View, Views
 from planners.nbv.visibility import visibility
 from planners.occupancy import VoxelMap
-from planners.rrt import ClearanceGrid
 
 Array = NDArray[np.float64]
 
 
 @dataclass
-class RecedingHorizonNbv:
+class RecedingHorizonNbv(MapKeeping):
     """Bircher-style receding-horizon NBV over a voxel map inside the box [lo, hi]."""
 
     voxel_map: VoxelMap
@@ -61,19 +60,7 @@ class RecedingHorizonNbv:
     last_nodes: int = 0
 
     def __post_init__(self) -> None:
-        self.grid = StateGrid.over(self.voxel_map, self.lo, self.hi)
-        self.derived = DerivedMaps(self.grid, self.safety_cell or max(0.5, 2.0 * self.grid.resolution))
-        self.rng = np.random.default_rng(self.seed)
-
-    @property
-    def safety(self) -> ClearanceGrid:
-        return self.derived.safety
-
-    def integrate(self, scan: Scan) -> None:
-        self.voxel_map.insert_scan(scan.origin, scan.endpoints, scan.hit, max_range=self.scanner.max_range)
-        box = self.grid.refresh(self.voxel_map, scan.origin, scan.endpoints)
-        if box is not None:
-            self.derived.update(*box)
+        self._init_maps()
 
     def reject(self, view: View) -> None:
         self.rejected.append(view.point)

@@ -23,10 +23,10 @@ from numpy.typing import ArrayLike, NDArray
 from planners.nbv.candidates import candidate_views
 from planners.nbv.derived import DerivedMaps
 from planners.nbv.grid import StateGrid
+from planners.nbv.mapping import MapKeeping
 from planners.nbv.utility import ViewTerms, Weights, view_utility
 from planners.nbv.views import Scanner, View, Views
 from planners.occupancy import VoxelMap
-from planners.rrt import ClearanceGrid
 
 Array = NDArray[np.float64]
 
@@ -52,7 +52,7 @@ class Proposal:
 
 
 @dataclass
-class NbvPlanner:
+class NbvPlanner(MapKeeping):
     """Next-best-view scanning with the seed's utility over a voxel map, inside the box [lo, hi]."""
 
     voxel_map: VoxelMap
@@ -76,22 +76,7 @@ class NbvPlanner:
     rejected: list[Array] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        self.grid = StateGrid.over(self.voxel_map, self.lo, self.hi)
-        self.derived = DerivedMaps(self.grid, self.safety_cell or max(0.5, 2.0 * self.grid.resolution))
-        self.rng = np.random.default_rng(self.seed)
-
-    @property
-    def safety(self) -> ClearanceGrid:
-        """Clearance from occupied and (mostly) unknown space, for candidates and the paths between views."""
-        return self.derived.safety
-
-    def integrate(self, scan: Scan) -> None:
-        """Fuse one scan into the map (free along beams, occupied at returns), the dense window and the safety
-        grid (clearance from occupied and unknown voxels)."""
-        self.voxel_map.insert_scan(scan.origin, scan.endpoints, scan.hit, max_range=self.scanner.max_range)
-        box = self.grid.refresh(self.voxel_map, scan.origin, scan.endpoints)
-        if box is not None:
-            self.derived.update(*box)
+        self._init_maps()
 
     def propose(self, pose: View) -> View | None:
         """The next best view from `pose`, or None when no candidate would reveal `min_unknown` voxels."""

@@ -8,7 +8,8 @@ is a visiting order of stop indices starting with its start stop; a closed tour 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections import deque
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -92,3 +93,28 @@ def canonical(order: Sequence[int], start: int, closed: bool) -> tuple[int, ...]
         i = seq.index(start)
         seq = seq[i:] + seq[:i]
     return tuple(seq)
+
+
+def dont_look_search(queued: bytearray | list[int], start: Iterable[int],
+                     improve: Callable[[int], tuple[float, Iterable[int]] | None]) -> float:
+    """Local search with don't-look bits: try `improve` from each queued stop; a stop is queued again only when a
+    move touches one of its tour edges. `queued` is the per-stop flag array (0/1); returns the total gain."""
+    todo: deque[int] = deque()
+    for v in start:
+        if not queued[v]:
+            queued[v] = 1
+            todo.append(v)
+    total = 0.0
+    while todo:
+        a = todo.popleft()
+        queued[a] = 0
+        found = improve(a)
+        if found is None:
+            continue
+        gain, touched = found
+        total += gain
+        for v in touched:
+            if not queued[v]:
+                queued[v] = 1
+                todo.append(v)
+    return total

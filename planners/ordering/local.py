@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import random
 import time
-from collections import deque
 from collections.abc import Iterable, Sequence
+
+from .costs import dont_look_search
 
 EPS = 1e-9
 Move = tuple[int, int, int, int, int, int, int]
@@ -227,26 +228,7 @@ class ClosedTour:
     def optimise(self, start: Iterable[int]) -> float:
         """Improve until no move from a queued stop gains (don't-look bits: a stop is queued again only when
         one of its tour edges changes). Returns the total gain."""
-        queued = self.queued
-        todo: deque[int] = deque()
-        for v in start:
-            if not queued[v]:
-                queued[v] = 1
-                todo.append(v)
-        total = 0.0
-        while todo:
-            a = todo.popleft()
-            queued[a] = 0
-            found = self.improve(a)
-            if found is None:
-                continue
-            gain, touched = found
-            total += gain
-            for v in touched:
-                if not queued[v]:
-                    queued[v] = 1
-                    todo.append(v)
-        return total
+        return dont_look_search(self.queued, start, self.improve)
 
     def double_bridge(self, i: int, l1: int, l2: int, l3: int) -> tuple[float, list[int]]:
         """The double-bridge kick on the three segments of lengths l1, l2, l3 after position i (A B C → C B A

@@ -10,10 +10,10 @@ against the precedences by positions before it is taken. The kicks and the itera
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Iterable, Sequence
 
 from .construct import pull_forward
+from .costs import dont_look_search
 
 EPS = 1e-9
 EXCHANGE_BREADTH = 6  # candidates tried for each added edge of a segment exchange
@@ -283,23 +283,13 @@ class PrecedencePath:
         return touched
 
     def optimise(self, start: Iterable[int]) -> float:
-        queued = self.queued
-        todo: deque[int] = deque()
-        for v in start:
-            if not queued[v]:
-                queued[v] = 1
-                todo.append(v)
-        gain = 0.0
-        while todo:
-            a = todo.popleft()
-            queued[a] = 0
+        """Apply the best precedence-keeping move from each queued stop until none gains (don't-look bits)."""
+
+        def improve(a: int) -> tuple[float, list[int]] | None:
             found = self.best_move(a)
             if found is None:
-                continue
-            g, move = found
-            gain += g
-            for v in self.apply(move):
-                if not queued[v]:
-                    queued[v] = 1
-                    todo.append(v)
-        return gain
+                return None
+            gain, move = found
+            return gain, self.apply(move)
+
+        return dont_look_search(self.queued, start, improve)
