@@ -77,6 +77,37 @@ class ReferencingResult:
         return ReferencingResult(False, details={"reason": reason, **details})
 
 
+@dataclass(frozen=True)
+class OdometryRequest:
+    """What an agent asks of a visual-odometry plug-in with each frame.
+
+    `set_origin` makes this frame the origin of a new chain (an agent does it on the frame it was referenced
+    on, so that poses chain from that fix); the plug-in's first frame after `configure`/`reset` is an origin
+    too. `altitude` and `speed` (when known, from the navigation estimate) let an adaptive method choose its
+    step."""
+
+    set_origin: bool = False
+    altitude: float | None = None
+    speed: float | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class OdometryResult:
+    """The left camera's pose relative to the chain's origin frame: `T_origin_cam` maps the current camera
+    frame into the origin camera frame. `ok` is False while the plug-in has no estimate for this frame (tracking
+    lost, or the frame skipped by an adaptive step); the last good pose then stays the agent's business."""
+
+    ok: bool
+    T_origin_cam: Matrix | None = None
+    tracked: int = 0  # features supporting the estimate
+    frames_processed: int = 0  # since the origin
+    details: dict[str, Any] = field(default_factory=dict)
+
+    @staticmethod
+    def lost(reason: str = "", **details: Any) -> OdometryResult:
+        return OdometryResult(False, details={"reason": reason, **details})
+
+
 @runtime_checkable
 class PerceptionPlugin(Protocol):
     """The four calls a perception plug-in implements (see the module docstring)."""

@@ -10,7 +10,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from mission.errors import PluginError
-from mission.plugin_api import PerceptionPlugin, ReferencingResult, StereoImages
+from mission.plugin_api import OdometryResult, PerceptionPlugin, ReferencingResult, StereoImages
 from mission.plugins import load_plugin
 
 DEFAULT_BUDGET_S = 5.0  # per call; generous for a software renderer's machine, tight enough to catch a hang
@@ -47,7 +47,7 @@ class PluginHost:
         """Call a plug-in; on a fault or an overrun, log it and return a "not recognised" result."""
         plugin = self.plugins.get(role)
         if plugin is None:
-            return ReferencingResult.not_recognised(f"no '{role}' plug-in configured")
+            return _failed(role, f"no '{role}' plug-in configured")
         t0 = time.perf_counter()
         try:
             result = plugin.process(frame, request)
@@ -55,13 +55,13 @@ class PluginHost:
             elapsed = time.perf_counter() - t0
             self.emit("plugin_fault", now, plugin=self.names[role], role=role, error=repr(exc),
                       elapsed_ms=1e3 * elapsed)
-            return ReferencingResult.not_recognised(f"plug-in fault: {exc!r}", elapsed_ms=1e3 * elapsed)
+            return _failed(role, f"plug-in fault: {exc!r}", elapsed_ms=1e3 * elapsed)
         elapsed = time.perf_counter() - t0
         if elapsed > self.budget_s:
             self.emit("plugin_fault", now, plugin=self.names[role], role=role,
                       error=f"over its time budget ({1e3 * elapsed:.0f} ms > {1e3 * self.budget_s:.0f} ms)",
                       elapsed_ms=1e3 * elapsed)
-            return ReferencingResult.not_recognised("over the time budget", elapsed_ms=1e3 * elapsed)
+            return _failed(role, "over the time budget", elapsed_ms=1e3 * elapsed)
         return result
 
     def reset(self) -> None:
@@ -77,3 +77,10 @@ class PluginHost:
                 plugin.close()
             except Exception as exc:
                 self.emit("plugin_fault", 0.0, plugin=self.names[role], role=role, error=repr(exc))
+
+
+def _failed(role: str, reason: str, **details: Any) -> ReferencingResult | OdometryResult:
+    """The "no answer" result of a role: lost tracking for odometry, "not recognised" otherwise."""
+    if role == "odometry":
+        return OdometryResult.lost(reason, **details)
+    return ReferencingResult.not_recognised(reason, **details)
