@@ -13,6 +13,7 @@ from typing import Any, Literal
 
 from mission.agents import REGISTRY, Agent, AgentContext, Status
 from mission.agents.transit import TransitAgent
+from mission.artifacts import Artifacts
 from mission.knowledge import Knowledge
 from mission.language.models import Mission, RouteElement, Transit
 from mission.plugin_host import PluginHost
@@ -71,7 +72,8 @@ class Executive:
 
     def __init__(self, mission: Mission, vehicle: Vehicle, emit: Callable[..., None],
                  agents: Mapping[str, Callable[[], Agent]] | None = None,
-                 on_tick: Callable[[NavState], None] | None = None, plugins: PluginHost | None = None):
+                 on_tick: Callable[[NavState], None] | None = None, plugins: PluginHost | None = None,
+                 artifacts: Artifacts | None = None):
         self.mission = mission
         self.vehicle = vehicle
         self.emit = emit
@@ -81,6 +83,7 @@ class Executive:
         self.monitors: SafetyMonitors | None = None
         self.usbl_available = mission.sensors.usbl is not None
         self.plugins = plugins
+        self.artifacts = artifacts if artifacts is not None else Artifacts()
 
     def unsupported(self) -> list[RouteElement]:
         return [e for e in self.mission.route if e.kind not in self.agents]
@@ -101,7 +104,8 @@ class Executive:
         rep = ElementReport(element_id, kind, "running", start_time=nav.time)
         timeout = default_timeout(element, nav, self.mission)
         try:
-            agent.start(AgentContext(self.mission, element, nav, self.emit, self.report.knowledge, self.plugins))
+            agent.start(AgentContext(self.mission, element, nav, self.emit, self.report.knowledge, self.plugins,
+                                     self.artifacts))
             rep.planned_path = [tuple(map(float, p)) for p in agent.planned_path()]  # type: ignore[misc]
         except Exception as exc:  # an agent's fault is the element's failure, never the executive's crash
             rep.status, rep.reason, rep.end_time = "failed", f"agent failed to start: {exc!r}", nav.time
@@ -109,8 +113,9 @@ class Executive:
             return rep
         aided = self.usbl_available and agent.navigation == "usbl"
         self.vehicle.set_aiding(aided)
-        payload = agent.payload
+        payload, rate = agent.payload, agent.frame_rate_hz
         self.vehicle.set_payload(payload)
+        self.vehicle.set_frame_rate(rate)
         self.emit("element_started", nav.time, element=element_id, kind=kind, timeout_s=timeout,
                   navigation="usbl" if aided else "dead-reckoning", planned_path=rep.planned_path, abort=aborting)
         while True:
@@ -137,6 +142,9 @@ class Executive:
             if agent.payload != payload:
                 payload = agent.payload
                 self.vehicle.set_payload(payload)
+            if agent.frame_rate_hz != rate:
+                rate = agent.frame_rate_hz
+                self.vehicle.set_frame_rate(rate)
             self.vehicle.apply(command)
             self.vehicle.advance()
             if self.on_tick is not None:
@@ -146,6 +154,7 @@ class Executive:
         except Exception as exc:
             self.emit("agent_fault", nav.time, element=element_id, error=repr(exc))
         self.vehicle.set_payload(frozenset())
+        self.vehicle.set_frame_rate(None)
         if self.plugins is not None:
             self.plugins.reset()
         rep.end_time = nav.time

@@ -103,6 +103,10 @@ class Vehicle(Protocol):
         """Switch the named payload sensors on (`mbes`, `stereo`, …) and every other one off."""
         ...
 
+    def set_frame_rate(self, rate_hz: float | None) -> None:
+        """Trigger the stereo camera at this rate (capped by the camera's own; None: the camera's own rate)."""
+        ...
+
     def advance(self) -> None:
         """Let one control period pass (the simulator integrates it; a real vehicle waits)."""
         ...

@@ -17,6 +17,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+from mission.artifacts import Artifacts
 from mission.knowledge import Knowledge
 from mission.language.models import Mission, RouteElement
 from mission.plugin_host import PluginHost
@@ -39,6 +40,7 @@ class AgentContext:
     emit: Callable[..., None] = field(default=lambda *a, **k: None)
     knowledge: Knowledge = field(default_factory=Knowledge)
     plugins: PluginHost | None = None
+    artifacts: Artifacts = field(default_factory=Artifacts)
 
 
 class Agent(abc.ABC):
@@ -52,6 +54,7 @@ class Agent(abc.ABC):
         self.reason: str = ""
         self.navigation: str = "usbl"  # "usbl" or "dead-reckoning": which aiding the agent asks for
         self.payload: frozenset[str] = frozenset()  # payload sensors the agent needs on now ("mbes", "stereo")
+        self.frame_rate_hz: float | None = None  # stereo frames per second wanted (None: the camera's own rate)
         self.details: dict[str, Any] = {}  # element results for metrics (agent-specific)
 
     @abc.abstractmethod

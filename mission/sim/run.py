@@ -72,7 +72,9 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
     try:
         host = PluginHost(mission.plugins.model_dump(), {"sensors": mission.sensors.model_dump()}, emit) \
             if any(mission.plugins.model_dump().values()) else None
-        report = Executive(mission, vehicle, emit, on_tick=tick, plugins=host).run()
+        from mission.artifacts import Artifacts
+
+        report = Executive(mission, vehicle, emit, on_tick=tick, plugins=host, artifacts=Artifacts(out_dir)).run()
         if host is not None:
             host.close()
     finally:

@@ -84,6 +84,7 @@ class SimulatedVehicle:
         self.camera: Any = None
         self.next_frame = 0.0
         self.pending_frames: list[StereoImages] = []
+        self.frame_rate_hz = mission.sensors.stereo.rate_hz if mission.sensors.stereo is not None else 1.0
         self.log = SimLog()
         self._measure()
 
@@ -148,7 +149,7 @@ class SimulatedVehicle:
         frame = self.camera.render(t.north, t.east, t.depth, t.heading)
         self.pending_frames.append(StereoImages(t.time, frame.left, frame.right, frame.K, frame.baseline))
         self.log.frames.append((t.time, frame.T_world_left))
-        self.next_frame = t.time + 1.0 / self.mission.sensors.stereo.rate_hz  # type: ignore[union-attr]
+        self.next_frame = t.time + 1.0 / self.frame_rate_hz
 
     def observe(self) -> Observation:
         f = self.filter
@@ -182,6 +183,10 @@ class SimulatedVehicle:
                                        texture=self.scene.texture)
         if "stereo" in sensors:
             self.next_frame = max(self.next_frame, self.truth.time)
+
+    def set_frame_rate(self, rate_hz: float | None) -> None:
+        own = self.mission.sensors.stereo.rate_hz if self.mission.sensors.stereo is not None else 1.0
+        self.frame_rate_hz = own if rate_hz is None else min(max(rate_hz, 1e-3), own)
 
     def advance(self) -> None:
         dt = self.control_period
