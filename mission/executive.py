@@ -142,6 +142,11 @@ class Executive:
             if agent.payload != payload:
                 payload = agent.payload
                 self.vehicle.set_payload(payload)
+            if (self.usbl_available and agent.navigation == "usbl") != aided:
+                aided = self.usbl_available and agent.navigation == "usbl"
+                self.vehicle.set_aiding(aided)
+                self.emit("navigation_changed", nav.time, element=element_id,
+                          navigation="usbl" if aided else "dead-reckoning")
             if agent.frame_rate_hz != rate:
                 rate = agent.frame_rate_hz
                 self.vehicle.set_frame_rate(rate)

@@ -5,6 +5,8 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from mission.agents.base import Agent, AgentContext, Status
+from mission.agents.explore import ExploreAgent
+from mission.agents.inspect import InspectAgent
 from mission.agents.reference import ReferenceAgent
 from mission.agents.survey import SurveyAgent
 from mission.agents.transit import TransitAgent
@@ -15,6 +17,8 @@ REGISTRY: dict[str, AgentFactory] = {
     "transit": TransitAgent,
     "survey": SurveyAgent,
     "reference": ReferenceAgent,
+    "explore": ExploreAgent,
+    "inspect": InspectAgent,
 }
 
 
@@ -26,5 +30,5 @@ def create_agent(kind: str) -> Agent:
     return REGISTRY[kind]()
 
 
-__all__ = ["Agent", "AgentContext", "REGISTRY", "ReferenceAgent", "Status", "SurveyAgent", "TransitAgent",
+__all__ = ["Agent", "AgentContext", "ExploreAgent", "InspectAgent", "REGISTRY", "ReferenceAgent", "Status", "SurveyAgent", "TransitAgent",
            "create_agent", "supported_kinds"]

@@ -87,8 +87,19 @@ def _element_metrics(report: ExecutionReport, times: np.ndarray, north: np.ndarr
         item.update(copy.deepcopy(rep.details))
         if rep.kind == "survey":
             _survey_truth(item, rep, mission, scene)
+        if rep.kind == "explore":
+            from mission.sim.explore_metrics import explore_truth
+
+            element = next((e for e in mission.route if e.id == rep.id), None)
+            safe = element.explore.safe_distance if element is not None and element.explore is not None else 0.0
+            explore_truth(item, rep, report.knowledge, vehicle, scene, safe)
         if rep.kind == "reference":
             _reference_truth(item, vehicle, scene)
+        if rep.kind == "inspect":
+            from mission.sim.inspect_metrics import inspect_truth
+
+            _reference_truth(item, vehicle, scene)
+            inspect_truth(item, vehicle, scene)
         out.append(item)
     return out
 
