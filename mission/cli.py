@@ -47,7 +47,8 @@ def _simulate(args: argparse.Namespace) -> int:
     mission = load_mission(args.mission)
     check_supported(mission)
     out = Path(args.out) if args.out else Path("runs") / mission.name
-    result = simulate(mission, seed=args.seed, out=out, plots=not args.no_plots, progress=not args.quiet)
+    result = simulate(mission, seed=args.seed, out=out, plots=not args.no_plots, progress=not args.quiet,
+                      record_stereo=args.record_stereo)
     m = result.metrics
     state = "completed" if m["completed"] else ("ABORTED: " + (m["abort_reason"] or "") if m["aborted"]
                                                  else "not completed")
@@ -58,6 +59,9 @@ def _simulate(args: argparse.Namespace) -> int:
         extra = f" ({e['reason']})" if e.get("reason") else ""
         print(f"  {e['id']:<24} {e['kind']:<9} {e['status']:<10} {e['duration_s']:8.1f} s{extra}")
     print(f"run folder: {out}")
+    if args.record_stereo:
+        pairs = len(result.vehicle.log.frames)
+        print(f"stereo stream: {pairs} pair(s) in {out / 'stereo'} (KITTI layout; `auv vo {out / 'stereo'}`)")
     return 0 if m["completed"] else 1
 
 
@@ -97,6 +101,63 @@ def _bench(args: argparse.Namespace) -> int:
     return 1 if failed else 0
 
 
+def _eval_traj(args: argparse.Namespace) -> int:
+    from mission.trajectory_eval import evaluate, read_trajectory, rpe_table, summary_text
+
+    errors = evaluate(read_trajectory(args.ground_truth), read_trajectory(args.estimate), delta=args.delta)
+    if args.json:
+        print(json.dumps({"ground_truth": args.ground_truth, "estimate": args.estimate, **errors.as_dict()}))
+    else:
+        print(rpe_table(errors))
+        print(summary_text(errors))
+    return 0
+
+
+def _vo(args: argparse.Namespace) -> int:
+    import time
+
+    from tqdm import tqdm
+
+    from mission.trajectory_eval import evaluate, summary_text, write_trajectory
+
+    try:
+        from perception_plugins import vo
+    except ImportError as exc:
+        raise AuvError(f"the visual-odometry package is not available: {exc}") from exc
+    try:
+        sequence = vo.read_kitti_sequence(args.sequence)
+        options = {} if args.method is None else {"method": args.method}
+        with tqdm(total=len(sequence), unit="frame", desc=f"vo {args.method or ''}".strip(), leave=False,
+                  mininterval=0.5, disable=args.quiet, file=sys.stderr) as bar:
+
+            def progress(index: int) -> None:  # called after frame `index` (0-based)
+                bar.update(max(index + 1 - bar.n, 0))
+
+            wall0 = time.perf_counter()
+            poses = vo.estimate_trajectory(sequence, progress=progress, **options)
+            wall = time.perf_counter() - wall0
+    except vo.VoError as exc:
+        raise AuvError(str(exc)) from exc
+    write_trajectory(args.out, poses, sequence.times, fmt=args.format)
+    print(f"{args.out}: {len(poses)} poses ({args.format}) from {args.sequence} in {wall:.1f} s "
+          f"({len(poses) / max(wall, 1e-9):.1f} frames/s)")
+    if sequence.gt_poses is not None:
+        print(summary_text(evaluate(sequence.gt_poses, poses)))
+    return 0
+
+
+def _model_build(args: argparse.Namespace) -> int:
+    from mission.model_build import build_from_run
+
+    views = [int(v) for v in args.views.split(",")] if args.views else None
+    report = build_from_run(args.run, args.object, views, args.edits, args.out, args.extend)
+    print(f"{report.path}: {args.object} from views {', '.join(report.views)}; full model "
+          f"{report.full['points']} points, {report.full['lines']} lines, {report.full['corners']} corners")
+    for row in report.table:
+        print(f"  view {row['view']}: {row['points']} points, {row['lines']} lines, {row['corners']} corners")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="auv", description="Plan, simulate and execute AUV inspection missions.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -116,6 +177,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, help="random seed (default: the mission's)")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--record-stereo", action="store_true",
+                   help="write the stereo stream and true poses to DIR/stereo/ (KITTI odometry layout)")
     p.set_defaults(func=_simulate)
 
     p = sub.add_parser("plot", help="redraw a run folder's figures from its files")
@@ -132,6 +195,33 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("plugins", help="list installed perception plug-ins")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_plugins)
+
+    p = sub.add_parser("eval-traj", help="trajectory errors of an estimate: ATE, RPE, end-point drift")
+    p.add_argument("ground_truth", help="ground-truth trajectory (KITTI or TUM file)")
+    p.add_argument("estimate", help="estimated trajectory (KITTI or TUM file)")
+    p.add_argument("--delta", type=int, default=1, help="RPE over this many frames (default 1)")
+    p.add_argument("--json", action="store_true", help="print the metrics as JSON")
+    p.set_defaults(func=_eval_traj)
+
+    p = sub.add_parser("vo", help="stereo visual odometry over a KITTI-layout sequence")
+    p.add_argument("sequence", help="folder with image_0/, image_1/, calib.txt, times.txt (poses.txt optional)")
+    p.add_argument("--out", required=True, help="trajectory file to write")
+    p.add_argument("--format", choices=("kitti", "tum"), default="kitti", help="trajectory format (default kitti)")
+    p.add_argument("--method", choices=("classic", "klt", "adaptive", "network"),
+                   help="VO scheme (default: the VO package's)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_vo)
+
+    p = sub.add_parser("model", help="multi-view object models (seed 000 §3.1)")
+    msub = p.add_subparsers(dest="model_command", required=True)
+    p = msub.add_parser("build", help="build (or extend) an object's model from a run folder's stereo recording")
+    p.add_argument("run", help="run folder written by `auv simulate MISSION --record-stereo`")
+    p.add_argument("--object", required=True, help="object id in the run's mission database")
+    p.add_argument("--views", help="frame indices to use, comma-separated (default: chosen by proximity)")
+    p.add_argument("--edits", help="operator edits (YAML: base segment, edges and points picked in the images)")
+    p.add_argument("--out", help="model file (default: RUN/models/OBJECT.yaml)")
+    p.add_argument("--extend", help="extend this existing model with the run's views instead")
+    p.set_defaults(func=_model_build)
     return parser
 
 

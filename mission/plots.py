@@ -5,6 +5,7 @@
     profile.png      true and measured depth over the seabed under the vehicle, and altitude, per element
     navigation.png   horizontal navigation error against the filter's σ, with dead-reckoning spans and fixes
     survey_ID.png    per survey element: sensed depth and passes, information map, detections over the truth
+    explore_ID.png   per explore element: voxel model, views and path (plan, elevation), explored volume over time
 
 Plan views draw east to the right and north up at equal scale; depth axes grow downwards.
 """
@@ -47,11 +48,21 @@ def plot_run(folder: Path, out_dir: Path | None = None) -> list[Path]:
     for element, products in run.maps.items():
         if "info" in products:
             drawers.append((f"survey_{element}.png", _survey_drawer(run, element, products, scene)))
+        if "explore_views" in products:
+            drawers.append((f"explore_{element}.png", _explore_drawer(run, element, products, scene)))
     paths = []
     for name, draw in drawers:
         draw().savefig(out / name, dpi=DPI)  # a bare Figure: no pyplot state, no global backend change
         paths.append(out / name)
     return paths
+
+
+def _explore_drawer(run: RunData, element: str, products: dict[str, np.ndarray], scene: Scene | None
+                    ) -> Callable[[], Figure]:
+    from mission.explore_plots import explore_figure
+
+    item: dict[str, Any] = next((e for e in run.metrics.get("elements", []) if e.get("id") == element), {})
+    return lambda: explore_figure(element, products, item, scene)
 
 
 def _survey_drawer(run: RunData, element: str, products: dict[str, np.ndarray], scene: Scene | None

@@ -49,6 +49,28 @@ class SonarPing:
     position_sigma: float
 
 
+@dataclass(frozen=True, eq=False)
+class ScanFrame:
+    """One 3-D scanner frame (laser or structured light) with the navigation estimate at the time it was taken.
+
+    Ray k points along `directions_body[k]` (unit vectors in the vehicle body frame: x forward, y starboard,
+    z down; the scanner's mounting tilt included) and returned at `ranges[k]` metres when `hit[k]`; a ray with no
+    return has range `max_range` (free out to there). The pose is the estimate (flat attitude: the vehicle holds
+    zero pitch and roll): agents place frames with it.
+    """
+
+    time: float
+    ranges: NDArray[np.float64]
+    directions_body: NDArray[np.float64]
+    hit: NDArray[np.bool_]
+    max_range: float
+    north: float
+    east: float
+    depth: float
+    heading: float
+    position_sigma: float
+
+
 @dataclass(frozen=True)
 class Observation:
     """Everything an agent may look at on one control tick: the estimate and the sensor products since the
@@ -57,6 +79,7 @@ class Observation:
     nav: NavState
     sonar: tuple[SonarPing, ...] = ()
     stereo: tuple[StereoImages, ...] = ()
+    scans: tuple[ScanFrame, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -28,6 +28,8 @@ BENCHMARKS: dict[str, str] = {
     "ordering": "mission.bench.ordering",
     "rrt": "mission.bench.rrt",
     "nbv": "mission.bench.nbv",
+    "multiview": "mission.bench.multiview",
+    "vo": "mission.bench.vo",
 }
 
 BenchFn = Callable[[bool], tuple[dict[str, Any], dict[str, dict[str, Any]]]]

@@ -41,11 +41,14 @@ def check_supported(mission: Mission) -> None:
 
 
 def simulate(mission: Mission, seed: int | None = None, out: str | Path | None = None, plots: bool = True,
-             progress: bool = False, dt: float = 0.2) -> RunResult:
-    """Run `mission` in its world with a simulated vehicle; with `out`, write the run folder there."""
+             progress: bool = False, dt: float = 0.2, record_stereo: bool = False) -> RunResult:
+    """Run `mission` in its world with a simulated vehicle; with `out`, write the run folder there (and with
+    `record_stereo`, the stereo stream in `out/stereo/`, KITTI layout: `mission.sim.stereo_record`)."""
     check_supported(mission)
     if mission.world is None:
         raise AuvError(f"mission '{mission.name}' names no world; simulation needs `world:`")
+    if record_stereo and out is None:
+        raise AuvError("recording the stereo stream needs a run folder (`out`)")
     seed = mission.seed if seed is None else seed
     scene = build_scene(load_world(mission.world))
     vehicle = SimulatedVehicle(mission, scene, seed, dt)
@@ -54,6 +57,11 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
         from mission.runfolder import prepare_run_folder
 
         prepare_run_folder(out_dir, mission, seed)
+    recorder = None
+    if record_stereo and out_dir is not None:
+        from mission.sim.stereo_record import record_vehicle_stereo
+
+        recorder = record_vehicle_stereo(vehicle, out_dir / "stereo")
     log = EventLog(out_dir / "events.jsonl" if out_dir else None)
     bar = _progress_bar(mission) if progress else None
 
@@ -79,6 +87,8 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
             host.close()
     finally:
         log.close()
+        if recorder is not None:
+            recorder.close()
         if bar is not None:
             bar.close()
     wall = time.perf_counter() - wall0

@@ -17,7 +17,7 @@ from mission.navigation import NavigationFilter
 from mission.plugin_api import StereoImages
 from mission.sim import kinematics
 from mission.sim.kinematics import TrueState
-from mission.vehicle import HOVER_GAIN, HOVER_SPEED, Command, NavState, Observation, SonarPing
+from mission.vehicle import HOVER_GAIN, HOVER_SPEED, Command, NavState, Observation, ScanFrame, SonarPing
 from mission.world.scene import Scene
 
 HEADING_SIGMA_DEG = 0.3
@@ -48,6 +48,7 @@ class SimLog:
     seabed_contacts: int = 0
     pings: int = 0
     frames: list[tuple[float, Any]] = field(default_factory=list)  # (time, true T_world_left) of each pair
+    scans: list[tuple[float, Any, Any]] = field(default_factory=list)  # (time, true origin, true object hits)
 
 
 class SimulatedVehicle:
@@ -84,7 +85,11 @@ class SimulatedVehicle:
         self.camera: Any = None
         self.next_frame = 0.0
         self.pending_frames: list[StereoImages] = []
+        self.scanner: Any = None
+        self.next_scan = 0.0
+        self.pending_scans: list[ScanFrame] = []
         self.frame_rate_hz = mission.sensors.stereo.rate_hz if mission.sensors.stereo is not None else 1.0
+        self.frame_sink: Any = None  # called as sink(images, true T_world_left) with each pair (stereo recording)
         self.log = SimLog()
         self._measure()
 
@@ -141,6 +146,21 @@ class SimulatedVehicle:
             self.log.pings += 1
             self.next_ping += period
 
+    def _scan(self) -> None:
+        """Scanner frames due by now: cast from the true pose, tagged with the estimated pose; the true surface
+        points the rays hit on objects go to the log (for metrics), not to the agent."""
+        t, f = self.truth, self.filter
+        while self.next_scan <= t.time + 1e-9:
+            frame = self.scanner.scan(t.north, t.east, t.depth, t.heading)
+            ranges = np.where(frame.hit, frame.ranges, self.scanner.max_range)
+            self.pending_scans.append(ScanFrame(
+                time=t.time, ranges=ranges, directions_body=frame.directions_body, hit=frame.hit,
+                max_range=self.scanner.max_range, north=f.north, east=f.east, depth=self.depth_meas,
+                heading=self.heading_meas, position_sigma=f.sigma))
+            on_object = frame.object_ids != ""
+            self.log.scans.append((t.time, frame.origin_ned, frame.true_points_ned[on_object].astype(np.float32)))
+            self.next_scan += self.scanner.period_s
+
     def _capture(self) -> None:
         """A stereo pair rendered from the true pose; the truth of its pose goes to the log, not the agent."""
         t = self.truth
@@ -149,16 +169,20 @@ class SimulatedVehicle:
         frame = self.camera.render(t.north, t.east, t.depth, t.heading)
         self.pending_frames.append(StereoImages(t.time, frame.left, frame.right, frame.K, frame.baseline))
         self.log.frames.append((t.time, frame.T_world_left))
+        if self.frame_sink is not None:
+            self.frame_sink(self.pending_frames[-1], frame.T_world_left)
         self.next_frame = t.time + 1.0 / self.frame_rate_hz
 
     def observe(self) -> Observation:
         f = self.filter
         pings, self.pending_pings = tuple(self.pending_pings), []
         frames, self.pending_frames = tuple(self.pending_frames), []
+        scans, self.pending_scans = tuple(self.pending_scans), []
         return Observation(NavState(
             time=self.truth.time, north=f.north, east=f.east, depth=self.depth_meas, heading=self.heading_meas,
             speed=self.truth.speed, altitude=self.altitude_meas, position_sigma=f.sigma,
-            energy_wh=self.mission.vehicle.energy_wh - self.energy_used_wh), sonar=pings, stereo=frames)
+            energy_wh=self.mission.vehicle.energy_wh - self.energy_used_wh), sonar=pings, stereo=frames,
+            scans=scans)
 
     def apply(self, command: Command) -> None:
         self.command = command
@@ -183,6 +207,13 @@ class SimulatedVehicle:
                                        texture=self.scene.texture)
         if "stereo" in sensors:
             self.next_frame = max(self.next_frame, self.truth.time)
+        if "scanner" in sensors and self.scanner is None and self.mission.sensors.scanner is not None:
+            from mission.sim.scanner import Scanner3D
+
+            self.scanner = Scanner3D.from_settings(self.scene, self.mission.sensors.scanner,
+                                                   seed=self.rng.randrange(2**31))
+        if "scanner" in sensors:
+            self.next_scan = max(self.next_scan, self.truth.time)
 
     def set_frame_rate(self, rate_hz: float | None) -> None:
         own = self.mission.sensors.stereo.rate_hz if self.mission.sensors.stereo is not None else 1.0
@@ -220,6 +251,8 @@ class SimulatedVehicle:
             self._ping()
         if self.camera is not None and "stereo" in self.payload:
             self._capture()
+        if self.scanner is not None and "scanner" in self.payload:
+            self._scan()
         self.record()
 
     def record(self) -> None:

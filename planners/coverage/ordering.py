@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 EXACT_MAX = 13
+EXACT_WORK = 4e6          # at most about this many transit sums in the exact search (subsets × variants² / 2)
 
 
 def order_variants(
@@ -33,7 +34,7 @@ def order_variants(
     n_tasks = int(task_of.max()) + 1
     if n_tasks == 1:
         return [int(np.argmin(start_cost + finish_cost))]
-    if n_tasks <= EXACT_MAX:
+    if n_tasks <= EXACT_MAX and (1 << n_tasks) * len(task_of) ** 2 / 2 <= EXACT_WORK:
         return _held_karp(task_of, cost, start_cost, finish_cost)
     return _greedy_two_opt(task_of, reverse_of, cost, start_cost, finish_cost)
 

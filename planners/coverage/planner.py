@@ -12,9 +12,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .baseline import best_single_direction, single_direction_plan
-from .cells import cell_variants, decompose
-from .contours import contour_runs
-from .frames import from_sweep, to_sweep
 from .heading import (
     edge_headings,
     heading_grid,
@@ -24,16 +21,15 @@ from .heading import (
     sweep_score,
     u_turn_length,
 )
-from .joins import Joiner
-from .metrics import swept
-from .ordering import order_variants
-from .plan import CoveragePlan, assemble, count_turns, estimated_length
-from .runs import Run
+from .headlands import core_region, headland_tasks
+from .plan import CoveragePlan, assemble, estimated_length
 from .scene import Scene
-from .sweep import Sweep, SweepCache
+from .sweep import SweepCache
+from .tasks import cell_tasks, covers, order_tasks, trimmed
 
 Array = NDArray[np.float64]
-SHORTLIST = 4
+SHORTLIST = 3
+FULL_PLANS = 2         # line directions ordered in full (the best also in the headland layout)
 
 
 def meander(
@@ -64,11 +60,15 @@ def meander(
     of `swath` (default: the spacing). The path starts at the line end nearest `start` and prefers to finish
     near `finish`.
 
+    Where a zone is met, the contour passes next to it cover half a swath beyond the standoff: the lines there are
+    cut back to what the passes leave uncovered (`trims`), so that nothing is swept twice. A second layout flies
+    a ring round every zone and lays the lines over the rest only (`headlands`); the shorter wins.
+
     `heading="auto"` tries the directions of the boundary edges and a 2° grid, scores them in closed form by
-    number of lines (turns) and then length, and plans the best few in full. The best single-direction
-    boustrophedon (`baseline_boustrophedon`) is planned too: the cell plan with the fewest turns, then the
-    shortest, among those no longer than it is returned; if none is, the single-direction plan is returned
-    (`method` tells which).
+    number of lines (turns) and then length, and plans the best few up to their cells and contour passes; the two
+    shortest of those are cut back and ordered in full (the best also in the headland layout). The best
+    single-direction boustrophedon (`baseline_boustrophedon`) is planned too: the shortest cell plan is returned
+    if it is no longer than that, else the single-direction plan (`method` tells which).
 
     >>> plan = meander([[0, 0], [0, 400], [100, 400], [100, 0]], spacing=25.0, turn_radius=5.0)
     >>> plan.heading_deg, len(plan.lines), plan.turns, plan.cells
@@ -93,54 +93,28 @@ def meander(
         h = float(heading) % 180.0
         base = single_direction_plan(scene, sweeps.get(h), fill_tolerance, s_xy)
         heads = np.array([h])
-    options = [(sweeps.get(float(h)), *cell_runs(scene, sweeps.get(float(h)), fill_tolerance, s_xy, f_xy))
-               for h in heads]
-    ranked = sorted(options, key=lambda o: (count_turns(o[1]), estimated_length(scene, o[1])))
-    for sweep, runs, n_cells in ranked:
-        if estimated_length(scene, runs) > base.length_m * 1.02:
+    # every direction planned up to its tasks; the most promising trimmed and ordered in full, with lines up to the
+    # zones and (the best) in the headland layout too
+    drafts = sorted((cell_tasks(scene, sweeps.get(float(h)), fill_tolerance) for h in heads
+                     if sweeps.get(float(h)).pieces), key=lambda t: t.rough_length())[:FULL_PLANS]
+    rings = headland_tasks(scene)
+    if rings and drafts:
+        core = SweepCache(core_region(scene, [variants[0] for variants in rings]), scene.forbidden, spacing)
+        inner = core.get(drafts[0].sweep.heading_deg)
+        if inner.pieces:
+            drafts.append(cell_tasks(scene, inner, fill_tolerance, rings))
+    options = []
+    for draft in drafts:
+        tasks = trimmed(scene, draft, fill_tolerance)
+        runs = order_tasks(scene, tasks.all, s_xy, f_xy)
+        options.append((estimated_length(scene, runs), tasks.sweep, runs, len(tasks.cells), bool(draft.extra)))
+    options.sort(key=lambda o: o[0])
+    for estimate, sweep, runs, n_cells, has_extra in options:
+        if estimate > base.length_m * 1.02:
+            continue
+        if has_extra and not covers(scene, runs, fill_tolerance):
             continue
         plan = assemble(scene, runs, sweep.heading_deg, sweep.spacing, n_cells, "boustrophedon-cells")
         if plan.length_m <= base.length_m + 1e-6:
             return plan
     return base
-
-
-def cell_runs(scene: Scene, sweep: Sweep, tolerance: float, start: Array | None = None,
-              finish: Array | None = None) -> tuple[list[Run], int]:
-    """Boustrophedon cells of one sweep, each a meander, plus the contour passes the lines leave needed, ordered to
-    minimise the transits: the runs in flying order (not yet joined by transits) and the number of cells."""
-    if not sweep.pieces:
-        raise ValueError("no survey line fits in the area outside the no-go zones")
-    joiner = Joiner(scene, sweep)
-    tasks = cell_variants(joiner, decompose(sweep))
-    n_cells = len(tasks)
-    if scene.has_zones:
-        # what the lines cover whichever start side each cell is flown from (turns may pull line ends back)
-        residual = scene.free.difference(swept(_common_lines(tasks, sweep.heading_deg), scene.swath))
-        tasks += [[c, c.reversed()] for c in contour_runs(scene, residual, sweep.spacing, tolerance)]
-    runs: list[Run] = [r for variants in tasks for r in variants]
-    task_of = np.array([t for t, variants in enumerate(tasks) for _ in variants], dtype=np.int64)
-    reverse_of = np.arange(len(runs), dtype=np.int64) ^ 1           # variants come in (forward, backward) pairs
-    entries = np.array([r.path[0] for r in runs])
-    exits = np.array([r.path[-1] for r in runs])
-    cost = scene.transit_costs(exits, np.array([r.exit_angle for r in runs]), entries,
-                               np.array([r.entry_angle for r in runs]))
-    cost[task_of[:, None] == task_of[None, :]] = np.inf
-    start_cost = np.zeros(len(runs)) if start is None else scene.router.lengths(start, entries)[0]
-    finish_cost = np.zeros(len(runs)) if finish is None else scene.router.lengths(exits, finish)[:, 0]
-    order = order_variants(task_of, reverse_of, cost, start_cost, finish_cost)
-    return [runs[v] for v in order], n_cells
-
-
-def _common_lines(tasks: list[list[Run]], heading_deg: float) -> list[Array]:
-    """Each cell's lines shortened to the part every variant of the cell flies."""
-    out = []
-    for variants in tasks:
-        forward = variants[0::2]
-        for j in range(len(forward[0].lines)):
-            uv = [to_sweep(run.lines[j], heading_deg) for run in forward]
-            lo = max(float(seg[:, 0].min()) for seg in uv)
-            hi = min(float(seg[:, 0].max()) for seg in uv)
-            if hi > lo:
-                out.append(from_sweep(np.array([[lo, uv[0][0, 1]], [hi, uv[0][0, 1]]]), heading_deg))
-    return out

@@ -1,5 +1,11 @@
 """Starting orders for the local search of the visiting order (seed 002 §3.4): the greedy-edge tour (shortest edges
-first, no stop of degree three, no early cycle) and the nearest feasible neighbour for paths with precedence.
+first, no stop of degree three, no early cycle), the savings tour (Clarke and Wright: the same greedy matching, but
+of the edges that save most over going out and back from a central hub), and the nearest feasible neighbour for
+paths with precedence.
+
+The savings tour starts the plain-tour search: the savings tour is the shorter of the two on random fields, and
+its overall shape, which the kicks of the local search rarely change wholesale, decides much of the last few tenths
+of a percent (in `auv bench ordering` the search ends closer to LKH from it than from the greedy-edge tour).
 """
 
 from __future__ import annotations
@@ -11,10 +17,24 @@ import numpy as np
 from .costs import Array
 
 
+def savings_tour(cost: Array, neighbours: Sequence[Sequence[int]]) -> list[int]:
+    """A closed tour by the savings heuristic (Clarke and Wright) for symmetric costs: with the hub h the stop of
+    least total cost to all others, the candidate edges (each stop to its neighbours) are matched greedily in order
+    of the saving cost[h, a] + cost[h, b] − cost[a, b], as `greedy_tour` matches them by length.
+
+    >>> pts = np.array([[0, 0], [0, 1], [1, 1], [1, 0], [0.5, 0.5]], dtype=float)
+    >>> c = np.sqrt(((pts[:, None] - pts[None]) ** 2).sum(-1))
+    >>> sorted(savings_tour(c, [[4, 1, 3], [4, 0, 2], [4, 1, 3], [4, 0, 2], [0, 1, 2]]))
+    [0, 1, 2, 3, 4]
+    """
+    hub = int(np.argmin(cost.sum(axis=1)))
+    return greedy_tour(cost - cost[hub][:, None] - cost[hub][None, :], neighbours)
+
+
 def greedy_tour(cost: Array, neighbours: Sequence[Sequence[int]]) -> list[int]:
     """A closed tour by the greedy-edge heuristic: candidate edges (each stop to its neighbours) are taken
-    shortest first while they keep every degree ≤ 2 and close no cycle; the fragments left are then joined end to
-    nearest free end. Symmetric costs.
+    cheapest first while they keep every degree ≤ 2 and close no cycle; the fragments left are then joined end to
+    cheapest free end. Symmetric costs (any sign: `savings_tour` passes negated savings).
 
     >>> pts = np.array([[0, 0], [0, 1], [1, 1], [1, 0]], dtype=float)
     >>> c = np.sqrt(((pts[:, None] - pts[None]) ** 2).sum(-1))

@@ -3,9 +3,10 @@ moves in the Lin–Kernighan manner (take an edge out, put a shorter one in from
 positive), chained up to `depth` 3-opt moves deep, over neighbour lists with don't-look bits, and the double-bridge
 kick of an iterated local search.
 
-The tour is an array with positions; every move is made of reversals (2-opt flips), logged so that a chain that
-ends worse, or a rejected kick, is undone by replaying the log backwards. Pure Python on lists: a move reads a
-handful of numbers, where numpy's per-call overhead would dominate. Symmetric costs only.
+The tour is an array with positions; every move is made of reversals (2-opt flips) of the shorter side, logged so
+that a chain that ends worse is undone by replaying the log backwards; a rejected kick is undone by restoring copies
+of the two arrays, which is cheaper than replaying the dozens of reversals its repair made. Pure Python on lists: a
+move reads a handful of numbers, where numpy's per-call overhead would dominate. Symmetric costs only.
 """
 
 from __future__ import annotations
@@ -30,8 +31,9 @@ class ClosedTour:
                  breadth: tuple[int, int] = (6, 5), depth: int = 4) -> None:
         self.cost = cost
         self.n = len(order)
-        self.near = [list(nb[:breadth[0]]) for nb in neighbours]
-        self.near5 = [list(nb[:breadth[1]]) for nb in neighbours]
+        # each stop's candidates with their costs, nearest first: the inner loops read both
+        self.near = [[(b, cost[a][b]) for b in nb[:breadth[0]]] for a, nb in enumerate(neighbours)]
+        self.near5 = [[(b, cost[a][b]) for b in nb[:breadth[1]]] for a, nb in enumerate(neighbours)]
         self.depth = depth
         self.order = list(order)
         self.pos = [0] * self.n
@@ -45,38 +47,36 @@ class ClosedTour:
         return sum(c[t[i - 1]][t[i]] for i in range(self.n))
 
     # -- reversals -------------------------------------------------------------------------------------------
-    def _reverse(self, i: int, j: int) -> None:
-        """Reverse positions i..j (cyclic); the shorter side is reversed, which gives the same cycle."""
-        n = self.n
-        if 2 * ((j - i) % n + 1) > n:
-            i, j = (j + 1) % n, (i - 1) % n
-        self.log.append((i, j))
-        self._raw_reverse(i, j)
-
     def _raw_reverse(self, i: int, j: int) -> None:
-        t, pos, n = self.order, self.pos, self.n
+        t, pos = self.order, self.pos
         if i <= j:
             seg = t[i:j + 1]
             seg.reverse()
             t[i:j + 1] = seg
-            for k in range(i, j + 1):
-                pos[t[k]] = k
+            for k, v in enumerate(seg, i):
+                pos[v] = k
             return
-        for _ in range(((j - i) % n + 1) // 2):
-            a, b = t[i], t[j]
-            t[i] = b
-            pos[b] = i
-            t[j] = a
-            pos[a] = j
-            i = i + 1 if i + 1 < n else 0
-            j = j - 1 if j > 0 else n - 1
+        cut = self.n - i                        # the segment wraps: positions i…n−1, then 0…j
+        seg = t[i:] + t[:j + 1]
+        seg.reverse()
+        t[i:] = seg[:cut]
+        t[:j + 1] = seg[cut:]
+        for k, v in enumerate(seg):
+            pos[v] = k + i if k < cut else k - cut
 
     def flip(self, a: int, b: int, c: int, d: int) -> None:
-        """Replace edges {a, b} and {c, d} by {a, c} and {b, d}; the cycle reads a b … c d one way or the other."""
-        if self.order[(self.pos[a] + 1) % self.n] == b:
-            self._reverse(self.pos[b], self.pos[c])
+        """Replace edges {a, b} and {c, d} by {a, c} and {b, d}; the cycle reads a b … c d one way or the other.
+        Of the two paths whose reversal does it, the shorter is reversed (logged, for `undo`)."""
+        pos, n = self.pos, self.n
+        pa = pos[a] + 1
+        if self.order[pa if pa < n else 0] == b:
+            i, j = pos[b], pos[c]
         else:
-            self._reverse(self.pos[c], self.pos[b])
+            i, j = pos[c], pos[b]
+        if 2 * ((j - i) % n + 1) > n:
+            i, j = (j + 1) % n, (i - 1) % n
+        self.log.append((i, j))
+        self._raw_reverse(i, j)
 
     def mark(self) -> int:
         return len(self.log)
@@ -97,7 +97,7 @@ class ClosedTour:
         worth is `gain` instead of its length); t3 is a near neighbour of t2 with a positive running gain; t4 is
         next to t3: t4 before t3 closes as a 2-opt or goes on to t5 (near t4) and t6 on the side that keeps one
         cycle; t4 after t3 needs t5 between t2 and t3 (a segment exchange, both segments kept or reversed).
-        Edges in `added` (put in earlier in the chain) are not taken out again.
+        Edges in `added` (put in earlier in the chain, both ways round) are not taken out again.
         Returns (gain, move, open gain, open move); a gain is the length removed minus the length added.
         """
         D, t, pos, n, near, near5 = self.cost, self.order, self.pos, self.n, self.near, self.near5
@@ -113,9 +113,8 @@ class ClosedTour:
                 continue
             d12 = gain if t2_only >= 0 else Dt1[t2]
             p2 = pos[t2]
-            Dt2 = D[t2]
-            for t3 in near[t2]:
-                g1 = d12 - Dt2[t3]
+            for t3, d23 in near[t2]:
+                g1 = d12 - d23
                 if g1 <= 0.0:
                     break
                 if t3 == t1:
@@ -124,14 +123,13 @@ class ClosedTour:
                 o3 = ((p3 - p2) * dr) % n
                 Dt3 = D[t3]
                 t4 = t[(p3 - dr) % n]
-                if t4 != t2 and not (added and ((t3, t4) in added or (t4, t3) in added)):
+                if t4 != t2 and not (added and (t3, t4) in added):
                     g2 = g1 + Dt3[t4]
                     g = g2 - Dt1[t4]
                     if g > best:
                         best, move = g, (0, t1, t2, t3, t4, 0, 0)
-                    Dt4 = D[t4]
-                    for t5 in near5[t4]:
-                        g3 = g2 - Dt4[t5]
+                    for t5, d45 in near5[t4]:
+                        g3 = g2 - d45
                         if g3 <= best:
                             break
                         if t5 == t3 or t5 == t1:
@@ -143,7 +141,7 @@ class ClosedTour:
                                 continue
                         else:
                             t6 = t[(p5 - dr) % n]
-                        if added and ((t5, t6) in added or (t6, t5) in added):
+                        if added and (t5, t6) in added:
                             continue
                         g4 = g3 + D[t5][t6]
                         g = g4 - Dt1[t6]
@@ -152,18 +150,17 @@ class ClosedTour:
                         elif g4 > best_open:
                             best_open, open_move = g4, (1, t1, t2, t3, t4, t5, t6)
                 t4 = t[(p3 + dr) % n]
-                if t4 != t1 and not (added and ((t3, t4) in added or (t4, t3) in added)):
+                if t4 != t1 and not (added and (t3, t4) in added):
                     g2 = g1 + Dt3[t4]
-                    Dt4 = D[t4]
-                    for t5 in near5[t4]:
-                        g3 = g2 - Dt4[t5]
+                    for t5, d45 in near5[t4]:
+                        g3 = g2 - d45
                         if g3 <= best:
                             break
                         p5 = pos[t5]
                         if ((p5 - p2) * dr) % n >= o3:
                             continue
                         t6 = t[(p5 + dr) % n]
-                        if not (added and ((t5, t6) in added or (t6, t5) in added)):
+                        if not (added and (t5, t6) in added):
                             g4 = g3 + D[t5][t6]
                             g = g4 - Dt1[t6]
                             if g > best:
@@ -172,7 +169,7 @@ class ClosedTour:
                                 best_open, open_move = g4, (2, t1, t2, t3, t4, t5, t6)
                         if t5 != t2:
                             t6 = t[(p5 - dr) % n]
-                            if not (added and ((t5, t6) in added or (t6, t5) in added)):
+                            if not (added and (t5, t6) in added):
                                 g4 = g3 + D[t5][t6]
                                 g = g4 - Dt1[t6]
                                 if g > best:
@@ -199,8 +196,7 @@ class ClosedTour:
                 break
             self.apply(open_move)
             _, _, t2, t3, t4, t5, t6 = open_move
-            added.add((t2, t3))
-            added.add((t4, t5))
+            added.update(((t2, t3), (t3, t2), (t4, t5), (t5, t4)))
             touched.extend(open_move[1:])
             gain, move, open_gain, open_move = self.search(t1, t6, open_gain, added)
             if move is not None:
@@ -267,11 +263,13 @@ def iterated_local_search(tour: ClosedTour, rng: random.Random, kicks: int, max_
             cuts = (i, i + l1, i + l1 + l2, i + l1 + l2 + l3)
             if any({t[p % n], t[(p + 1) % n]} == fix for p in cuts):
                 continue
+        saved_order, saved_pos = tour.order[:], tour.pos[:]
         delta, touched = tour.double_bridge(i, l1, l2, l3)
         change = delta - tour.optimise(touched)
         if change <= EPS:
             total -= change
-            tour.log.clear()
-        else:
-            tour.undo()
+        else:                                   # rejected: restoring copies beats replaying the reversals
+            tour.order[:] = saved_order
+            tour.pos[:] = saved_pos
+        tour.log.clear()
     return total

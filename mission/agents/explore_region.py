@@ -1,0 +1,144 @@
+"""What an explore element scans and what it knows before it starts (seed 002 §2.2.2: "the start point and the
+safe trajectory around the object can be determined from the occupancy and information maps obtained before").
+
+* `targets`: the objects an `explore.object` names — every detected object the database lacks (`detected`), or
+  a database object by id — each as a `Target` (estimated centre, footprint radius, top and bottom depths);
+* `exploration_box`: the box around a target the view planner works in;
+* `prior_map`: a voxel map seeded from the survey's height map (`Knowledge.maps`, estimated frame): the water
+  column above each sounding free, the sounding occupied — what the multibeam saw from above;
+* `survey_map_for`: the survey products whose grid covers a target.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mission.agents.survey import charted_centre
+from mission.knowledge import Knowledge
+from mission.language.models import Mission
+from planners.occupancy import VoxelMap
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Target:
+    """An object to scan, in the estimated frame (NED metres)."""
+
+    id: str
+    north: float
+    east: float
+    radius: float
+    """Half the footprint's diagonal."""
+    top_depth: float
+    bottom_depth: float
+    """The seabed under it (top + height)."""
+    length: float
+    width: float
+    heading_deg: float
+    source: str  # "detected" | "database"
+
+    @property
+    def centre(self) -> Array:
+        return np.array([self.north, self.east, 0.5 * (self.top_depth + self.bottom_depth)])
+
+
+def targets(name: str, mission: Mission, knowledge: Knowledge) -> list[Target]:
+    """The targets `explore.object: name` designates (empty when there are none)."""
+    if name == "detected":
+        return [Target(d.id, d.north, d.east, 0.5 * math.hypot(d.length, d.width), d.depth, d.depth + d.height,
+                       d.length, d.width, d.heading_deg, "detected") for d in knowledge.unknown_objects()]
+    found = [d for d in knowledge.detections if d.database_id == name]
+    if found:  # the survey saw it: its estimate beats the chart
+        d = found[-1]
+        return [Target(name, d.north, d.east, 0.5 * math.hypot(d.length, d.width), d.depth, d.depth + d.height,
+                       d.length, d.width, d.heading_deg, "detected")]
+    obj = next((o for o in mission.objects if o.id == name), None)
+    if obj is None:
+        return []
+    n, e = charted_centre(obj)
+    length, width, height = obj.size
+    return [Target(name, n, e, 0.5 * math.hypot(length, width), obj.pose.depth - height, obj.pose.depth,
+                   length, width, obj.pose.heading, "database")]
+
+
+def exploration_box(target: Target, safe_distance: float, max_range: float, margin: float = 6.0,
+                    ceiling: float | None = None) -> tuple[Array, Array]:
+    """(lo, hi) of the box the planner explores: the target with room for views on a shell `safe_distance` to
+    `safe_distance + max_range/2` from it, from `ceiling` (the depth the vehicle arrives at, when shallower)
+    down to just under the seabed."""
+    half = target.radius + safe_distance + margin
+    up = safe_distance + 0.5 * max_range + 1.5
+    top = target.top_depth - up if ceiling is None else min(target.top_depth - up, ceiling)
+    lo = np.array([target.north - half, target.east - half, top])
+    hi = np.array([target.north + half, target.east + half, target.bottom_depth + 1.5])
+    return lo, hi
+
+
+def survey_map_for(knowledge: Knowledge, target: Target) -> dict[str, Any] | None:
+    """The latest survey height map whose grid holds the target's centre."""
+    for products in reversed(list(knowledge.maps.values())):
+        if "depth" not in products:
+            continue
+        depth = np.asarray(products["depth"])
+        cell, n0, e0 = float(products["cell"]), float(products["north0"]), float(products["east0"])
+        i = int(round((target.north - n0) / cell))
+        j = int(round((target.east - e0) / cell))
+        if 0 <= i < depth.shape[0] and 0 <= j < depth.shape[1]:
+            return products
+    return None
+
+
+def prior_map(products: dict[str, Any] | None, lo: Array, hi: Array, resolution: float) -> VoxelMap:
+    """A voxel map over [lo, hi]: for every voxel column with a sounding, free from the box's top down to the
+    sounding and occupied there — one miss and one hit, exactly what a vertical beam inserted with
+    `VoxelMap.insert_scan` gives (unknown where the survey has no sounding, or without a survey). Written in one
+    vectorised update instead of one beam per column."""
+    vm = VoxelMap(resolution)
+    if products is None:
+        return vm
+    depth = np.asarray(products["depth"], dtype=float)
+    cell, n0, e0 = float(products["cell"]), float(products["north0"]), float(products["east0"])
+    k_lo = np.floor(np.asarray(lo, dtype=float) / resolution).astype(np.int64)
+    k_hi = np.ceil(np.asarray(hi, dtype=float) / resolution).astype(np.int64)
+    ki, kj = np.arange(k_lo[0], k_hi[0]), np.arange(k_lo[1], k_hi[1])
+    ii = np.rint(((ki + 0.5) * resolution - n0) / cell).astype(np.int64)
+    jj = np.rint(((kj + 0.5) * resolution - e0) / cell).astype(np.int64)
+    on = (ii[:, None] >= 0) & (ii[:, None] < depth.shape[0]) & (jj[None, :] >= 0) & (jj[None, :] < depth.shape[1])
+    sounding = np.full(on.shape, np.nan)
+    sounding[on] = depth[np.clip(ii, 0, depth.shape[0] - 1)[:, None].repeat(len(jj), 1)[on],
+                         np.clip(jj, 0, depth.shape[1] - 1)[None, :].repeat(len(ii), 0)[on]]
+    ci, cj = np.nonzero(np.isfinite(sounding) & (sounding > lo[2]))
+    if not len(ci):
+        return vm
+    end_k = np.floor(sounding[ci, cj] / resolution).astype(np.int64)  # the voxel each sounding lies in
+    kz = np.arange(k_lo[2], int(end_k.max()) + 1)
+    free = kz[None, :] < end_k[:, None]
+    col, lev = np.nonzero(free)
+    keys_free = np.stack([ki[ci[col]], kj[cj[col]], kz[lev]], axis=1)
+    keys_hit = np.stack([ki[ci], kj[cj], end_k], axis=1)
+    store, codec = vm.store, vm.codec
+    store.cover(np.minimum(keys_free.min(axis=0), keys_hit.min(axis=0)),
+                np.maximum(keys_free.max(axis=0), keys_hit.max(axis=0)))
+    for keys, table in ((keys_free, codec.after_miss), (keys_hit, codec.after_hit)):
+        rel = (keys - store.origin_key).astype(np.int32).T.copy()
+        at = store.positions((rel[0], rel[1], rel[2]), allocate=True)
+        store.pool[at] = table.take(store.pool.take(at))
+    return vm
+
+
+def seabed_depth(products: dict[str, Any] | None, target: Target, radius: float) -> float:
+    """The deepest sounding within `radius` of the target (its bottom depth without a survey)."""
+    if products is None:
+        return target.bottom_depth
+    depth = np.asarray(products["depth"], dtype=float)
+    cell, n0, e0 = float(products["cell"]), float(products["north0"]), float(products["east0"])
+    i0, i1 = int((target.north - radius - n0) / cell), int((target.north + radius - n0) / cell) + 1
+    j0, j1 = int((target.east - radius - e0) / cell), int((target.east + radius - e0) / cell) + 1
+    window = depth[max(i0, 0):max(i1, 0), max(j0, 0):max(j1, 0)]
+    return float(np.nanmax(window)) if window.size and np.isfinite(window).any() else target.bottom_depth

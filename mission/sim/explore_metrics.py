@@ -1,0 +1,194 @@
+"""Metrics of an explore element against the truth the simulator kept (seed 002 §2.2).
+
+For each object the agent explored, matched to the true object it is (the nearest within `MATCH_RADIUS_M`):
+
+* `surface_observed_percent`: the share of the object's TRUE surface voxels (voxels of the agent's resolution
+  holding a point of a part's exposed surface: neither inside another part nor within `CONTACT_M` of the seabed
+  or below it — where a part meets the seabed no sensor sees it) in which a
+  scanner ray truly ended: the simulator logs, for every frame, the exact surface points its rays hit on
+  objects, cast from the true pose. This is what the sensor observed, whatever the navigation error;
+* `map_surface_percent`: the share of the same true surface voxels next to (within one voxel of) a voxel the
+  agent's own map holds occupied. The map is built at the estimated poses, so this also pays for navigation
+  error between views; the gap between the two figures is that price;
+* `min_distance_to_object_m`: the closest approach of the TRUE trajectory during the element to the object's TRUE
+  geometry (exact distance to the boxes and cylinders), and `safe_distance_breached` when it is below the
+  element's `safe_distance`; `min_distance_to_seabed_m` likewise (true depth against the true seabed under the
+  vehicle);
+* the element's `path_length_m` is the true 3-D path length (the vehicle moves vertically between views).
+
+For photo surveys, `photo_coverage_percent` is computed by the agent from its footprints and kept as it is.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mission.executive import ElementReport
+from mission.frames import rotation_zyx
+from mission.knowledge import Knowledge
+from mission.sim.vehicle import SimulatedVehicle
+from mission.world.model import Box, Cylinder, Part
+from mission.world.scene import PlacedObject, Scene
+
+Array = NDArray[np.float64]
+MATCH_RADIUS_M = 5.0
+CONTACT_M = 0.1
+"""Surface this close above the seabed is in contact with it (the seabed model is a 1 m grid with ~0.25 m of
+roughness; sediment fills such gaps), so it is not counted as exposed."""
+_AXIS = {"x": rotation_zyx(0.0, 90.0, 0.0), "y": rotation_zyx(0.0, 0.0, -90.0), "z": np.eye(3)}
+
+
+def part_frame(obj: PlacedObject, part: Part) -> tuple[Array, Array]:
+    """(R_world_part, centre in the world) of a part; a cylinder's local z is its axis."""
+    T = obj.T_world_object
+    R_object_part = rotation_zyx(part.heading) if isinstance(part, Box) else _AXIS[part.axis]
+    return T[:3, :3] @ R_object_part, T[:3, :3] @ np.asarray(part.at, dtype=float) + T[:3, 3]
+
+
+def _grid(a: float, b: float, spacing: float) -> Array:
+    return np.linspace(a, b, max(2, math.ceil((b - a) / spacing) + 1))
+
+
+def _local_surface(part: Part, spacing: float) -> Array:
+    """Surface points of a part in its own frame (centred; a cylinder along z)."""
+    if isinstance(part, Box):
+        half = 0.5 * np.asarray(part.size, dtype=float)
+        out = []
+        for axis in range(3):
+            u, v = [a for a in range(3) if a != axis]
+            uu, vv = np.meshgrid(_grid(-half[u], half[u], spacing), _grid(-half[v], half[v], spacing), indexing="ij")
+            for sign in (-1.0, 1.0):
+                face = np.zeros((uu.size, 3))
+                face[:, axis], face[:, u], face[:, v] = sign * half[axis], uu.ravel(), vv.ravel()
+                out.append(face)
+        return np.concatenate(out)
+    assert isinstance(part, Cylinder)
+    r, h = part.radius, 0.5 * part.height
+    angles = np.linspace(0.0, 2.0 * math.pi, max(8, math.ceil(2.0 * math.pi * r / spacing)), endpoint=False)
+    aa, zz = np.meshgrid(angles, _grid(-h, h, spacing), indexing="ij")
+    parts = [np.stack([r * np.cos(aa.ravel()), r * np.sin(aa.ravel()), zz.ravel()], axis=1)]
+    for rho in _grid(0.0, r, spacing):
+        n = max(1, math.ceil(2.0 * math.pi * rho / spacing))
+        a = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
+        for z in (-h, h):
+            parts.append(np.stack([rho * np.cos(a), rho * np.sin(a), np.full(n, z)], axis=1))
+    return np.concatenate(parts)
+
+
+def distance_to_part(points: Array, obj: PlacedObject, part: Part) -> Array:
+    """Exact distance (m) from world points (N, 3) to a part (0 inside it)."""
+    R, c = part_frame(obj, part)
+    q = (np.asarray(points, dtype=float).reshape(-1, 3) - c) @ R
+    if isinstance(part, Box):
+        gap = np.maximum(np.abs(q) - 0.5 * np.asarray(part.size, dtype=float), 0.0)
+        return np.asarray(np.linalg.norm(gap, axis=1))
+    radial = np.maximum(np.hypot(q[:, 0], q[:, 1]) - part.radius, 0.0)
+    axial = np.maximum(np.abs(q[:, 2]) - 0.5 * part.height, 0.0)
+    return np.asarray(np.hypot(radial, axial))
+
+
+def distance_to_object(points: Array, obj: PlacedObject) -> Array:
+    return np.min([distance_to_part(points, obj, p.part) for p in obj.parts], axis=0)
+
+
+def surface_points(obj: PlacedObject, scene: Scene, spacing: float) -> Array:
+    """World points ≤ `spacing` apart on the object's exposed surface (not inside another part, not buried or in
+    contact with the seabed)."""
+    out = []
+    for k, placed in enumerate(obj.parts):
+        R, c = part_frame(obj, placed.part)
+        pts = _local_surface(placed.part, spacing) @ R.T + c
+        for j, other in enumerate(obj.parts):
+            if j != k:
+                pts = pts[distance_to_part(pts, obj, other.part) > 1e-6]
+        out.append(pts)
+    pts = np.concatenate(out) if out else np.zeros((0, 3))
+    seabed = scene.seabed.depths_at(pts[:, 0], pts[:, 1])
+    return pts[pts[:, 2] < seabed - CONTACT_M]
+
+
+def surface_keys(obj: PlacedObject, scene: Scene, resolution: float) -> NDArray[np.int64]:
+    """Keys floor(p / resolution) of the voxels holding some of the object's exposed surface."""
+    pts = surface_points(obj, scene, resolution / 3.0)
+    return np.unique(np.floor(pts / resolution).astype(np.int64), axis=0)
+
+
+def _contains(keys: NDArray[np.int64], query: NDArray[np.int64]) -> NDArray[np.bool_]:
+    """(M,) whether each query key is among `keys`."""
+    if not len(keys) or not len(query):
+        return np.zeros(len(query), dtype=bool)
+    lo = np.minimum(keys.min(axis=0), query.min(axis=0))
+    span = np.maximum(keys.max(axis=0), query.max(axis=0)) - lo + 1
+
+    def flat(k: NDArray[np.int64]) -> NDArray[np.int64]:
+        return np.asarray(((k[:, 0] - lo[0]) * span[1] + (k[:, 1] - lo[1])) * span[2] + (k[:, 2] - lo[2]))
+
+    return np.isin(flat(query), flat(keys))
+
+
+def _true_object(entry: dict[str, Any], scene: Scene) -> PlacedObject | None:
+    by_id = next((o for o in scene.objects if entry.get("source") == "database"
+                  and (o.database == entry["id"] or o.id == entry["id"])), None)
+    if by_id is not None:
+        return by_id
+    best = min(scene.objects, key=lambda o: math.hypot(o.footprint.centroid.y - entry["north"],
+                                                         o.footprint.centroid.x - entry["east"]), default=None)
+    if best is None:
+        return None
+    c = best.footprint.centroid
+    return best if math.hypot(c.y - entry["north"], c.x - entry["east"]) <= MATCH_RADIUS_M else None
+
+
+def explore_truth(item: dict[str, Any], rep: ElementReport, knowledge: Knowledge, vehicle: SimulatedVehicle,
+                  scene: Scene, safe_distance: float) -> None:
+    """Add the truth-based explore metrics to an element's metrics `item` (see the module docstring)."""
+    rows = np.array([r[:14] for r in vehicle.log.rows if rep.start_time < r[0] <= rep.end_time], dtype=float)
+    track = rows[:, 1:4] if len(rows) else np.zeros((0, 3))
+    if len(track) > 1:
+        item["path_length_m"] = round(float(np.linalg.norm(np.diff(track, axis=0), axis=1).sum()), 2)
+    if len(rows):
+        err = np.hypot(rows[:, 6] - rows[:, 1], rows[:, 7] - rows[:, 2])
+        item["navigation_error_m"] = {"mean": round(float(err.mean()), 3), "max": round(float(err.max()), 3)}
+        seabed = scene.seabed.depths_at(track[:, 0], track[:, 1])
+        item["min_distance_to_seabed_m"] = round(float(np.min(seabed - track[:, 2])), 3)
+    if item.get("planner") == "rrt-photo":
+        return
+    resolution = float(item.get("resolution_m", 0.25))
+    hits = [p for t, _, p in vehicle.log.scans if rep.start_time <= t <= rep.end_time and len(p)]
+    observed = np.unique(np.floor(np.concatenate(hits) / resolution).astype(np.int64), axis=0) if hits \
+        else np.zeros((0, 3), dtype=np.int64)
+    products = knowledge.maps.get(rep.id, {})
+    occupied = np.asarray(products.get("explore_occupied", np.zeros((0, 4))), dtype=float)
+    grown = np.zeros((0, 3), dtype=np.int64)
+    if len(occupied):
+        keys = np.floor(occupied[:, :3] / resolution).astype(np.int64)
+        offsets = np.stack(np.meshgrid(*[np.arange(-1, 2)] * 3, indexing="ij"), axis=-1).reshape(-1, 3)
+        grown = np.unique((keys[:, None, :] + offsets[None]).reshape(-1, 3), axis=0)
+    min_distances, observed_shares, map_shares = [], [], []
+    for entry in item.get("objects", []):
+        obj = _true_object(entry, scene)
+        if obj is None:
+            entry["true_object"] = None
+            continue
+        entry["true_object"] = obj.id
+        truth = surface_keys(obj, scene, resolution)
+        seen = _contains(observed, truth)
+        mapped = _contains(grown, truth)
+        entry["true_surface_voxels"] = int(len(truth))
+        entry["surface_observed_percent"] = round(100.0 * float(seen.mean()), 2) if len(truth) else 0.0
+        entry["map_surface_percent"] = round(100.0 * float(mapped.mean()), 2) if len(truth) else 0.0
+        d = float(distance_to_object(track, obj).min()) if len(track) else math.inf
+        entry["min_distance_to_object_m"] = round(d, 3)
+        min_distances.append(d)
+        observed_shares.append(entry["surface_observed_percent"])
+        map_shares.append(entry["map_surface_percent"])
+    if observed_shares:
+        item["surface_observed_percent"] = round(float(np.mean(observed_shares)), 2)
+        item["map_surface_percent"] = round(float(np.mean(map_shares)), 2)
+    if min_distances:
+        item["min_distance_to_object_m"] = round(min(min_distances), 3)
+        item["safe_distance_breached"] = bool(min(min_distances) < safe_distance)

@@ -1,0 +1,122 @@
+"""Long KLT tracking over fragments (seed 003, "Длительное прослеживание особенностей", Fig. 1–2).
+
+The feature set is generated at the fragment's start (the keyframe: spread corners, matched on the right image,
+triangulated). At each step of the fragment the surviving features are tracked by pyramidal LK from the previous
+position's image to the new one, seeded where the predicted motion puts them, and the new position's pose relative
+to the keyframe comes from PnP-RANSAC on the keyframe's points (features failing it die). At the fragment's end
+the survivors are tracked back from the end image to the start image: those that do not return within `back_tol`
+pixels of where they started are dropped ("projection onto the start of the fragment", a filter of unreliable
+tracks), the survivors are found in the end pair's right image, and the fragment's motion is re-estimated from them
+on both end images.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mission.plugin_api import StereoImages
+from perception_plugins.stereo import RectifiedStereo
+from perception_plugins.vo.features import lk, stereo_features, stereo_match
+from perception_plugins.vo.frontend import Array, Step, geometry_of, grey
+from perception_plugins.vo.motion import estimate_motion
+from perception_plugins.vo.se3 import invert, transform
+
+
+def _project(K: Array, points: Array, shift: float = 0.0) -> Array:
+    z = np.maximum(points[:, 2], 1e-6)
+    return np.column_stack([K[0, 0] * (points[:, 0] - shift) / z + K[0, 2], K[1, 1] * points[:, 1] / z + K[1, 2]])
+
+
+class KltTracker:
+    """The long-tracking front end (see the module docstring)."""
+
+    def __init__(self, features: int = 500, threshold_px: float = 1.5, back_tol: float = 1.0,
+                 max_depth: float | None = None, calibrate_offset: bool = True) -> None:
+        self.features, self.threshold_px, self.back_tol, self.max_depth = features, threshold_px, back_tol, max_depth
+        self.calibrate_offset = calibrate_offset
+        self.offsets: list[float] = []
+        """Disparity offsets (px) estimated at fragment ends (absolute: the offset in use plus the correction)."""
+        self.doffs = 0.0
+        """The disparity offset in use: the median of `offsets` once there are three."""
+        self.key_points: Array = np.zeros((0, 3))
+        self._key_uv: Array = np.zeros((0, 2))
+        self._key_image: NDArray[np.uint8] | None = None
+        self._last_image: NDArray[np.uint8] | None = None
+        self._last_uv: Array = np.zeros((0, 2))
+        self._alive: NDArray[np.bool_] = np.zeros(0, dtype=bool)
+        self._disparity = 0.0
+        self._key_doffs = 0.0
+
+    @property
+    def alive(self) -> int:
+        return int(self._alive.sum())
+
+    def start(self, frame: StereoImages, mask: NDArray[np.uint8] | None = None) -> int:
+        left, right = grey(frame.left), grey(frame.right)
+        feats = stereo_features(left, right, self._geometry(frame), self.features, mask, self._disparity,
+                                self.max_depth)
+        self._key_doffs = self.doffs
+        if len(feats):
+            self._disparity = float(np.median(feats.uv_left[:, 0] - feats.uv_right[:, 0]))
+        self.key_points, self._key_uv = feats.points_cam, feats.uv_left
+        self._key_image = self._last_image = left
+        self._last_uv = feats.uv_left.copy()
+        self._alive = np.ones(len(feats), dtype=bool)
+        return len(feats)
+
+    def track(self, frame: StereoImages, T_key_pred: Array | None) -> Step | None:
+        if self._last_image is None:
+            return None
+        idx = np.flatnonzero(self._alive)
+        guess = None
+        if T_key_pred is not None and len(idx):
+            p = transform(invert(T_key_pred), self.key_points[idx])
+            guess = np.where((p[:, 2] > 1e-3)[:, None], _project(frame.K, p), self._last_uv[idx])
+        left = grey(frame.left)
+        uv, ok = lk(self._last_image, left, self._last_uv[idx], guess)
+        idx, uv = idx[ok], uv[ok]
+        motion = estimate_motion(self.key_points[idx], uv, frame.K, T_a_b_guess=T_key_pred,
+                                 threshold_px=self.threshold_px)
+        if motion is None:
+            return None
+        return Step(motion.T_a_b, motion.count, {"index": idx[motion.inliers], "uv": uv[motion.inliers],
+                                                 "left": left})
+
+    def commit(self, frame: StereoImages, step: Step, end: bool) -> Array:
+        idx, uv, left = step.data["index"], step.data["uv"], step.data["left"]
+        self._alive[:] = False
+        self._alive[idx] = True
+        self._last_uv[idx] = uv
+        self._last_image = left
+        if not end or self._key_image is None:
+            return step.T_key_b
+        # Projection onto the fragment's start: the survivors must track back to where they were generated.
+        back, ok = lk(left, self._key_image, uv, self._key_uv[idx])
+        ok &= np.linalg.norm(back - self._key_uv[idx], axis=1) <= self.back_tol
+        if ok.sum() < 8:
+            ok[:] = True
+        idx, uv = idx[ok], uv[ok]
+        # Find the survivors in the end pair's right image, seeded by the motion's prediction, and re-estimate.
+        p = transform(invert(step.T_key_b), self.key_points[idx])
+        geometry = self._geometry(frame)
+        disparity = geometry.fB / np.maximum(p[:, 2], 1e-3) - geometry.doffs
+        uv_r, right_ok = stereo_match(left, grey(frame.right), uv, geometry, disparity)
+        motion = estimate_motion(self.key_points[idx], uv, frame.K, uv_b_right=uv_r, right_ok=right_ok,
+                                 baseline=frame.baseline, T_a_b_guess=step.T_key_b, threshold_px=self.threshold_px,
+                                 doffs=geometry.doffs, estimate_offset=self.calibrate_offset)
+        if motion is None:
+            return step.T_key_b
+        if self.calibrate_offset:
+            self.offsets.append(self._key_doffs + motion.disparity_offset)
+            if len(self.offsets) >= 3:
+                self.doffs = float(np.median(self.offsets))
+        return motion.T_a_b
+
+    def _geometry(self, frame: StereoImages) -> RectifiedStereo:
+        return replace(geometry_of(frame), doffs=geometry_of(frame).doffs + self.doffs)
+
+
+__all__ = ["KltTracker"]

@@ -1,0 +1,272 @@
+"""The odometer: a front end (classic or long KLT), a step policy (fixed or adaptive), the chain of local transforms
+and, optionally, the virtual reference network — fed one frame at a time, online or offline alike.
+
+Frames are pushed in order; the odometer buffers the frames since its last processed position and processes one
+when the buffer reaches the current step (fixed, or `adaptive.step_time`'s T·fps). A step that too few features
+support is halved (adaptive mode, down to one frame; seed 003's second mechanism); a step that fails outright is a
+tracking loss: the position is dead-reckoned at constant velocity and a new fragment starts there (the loss is
+counted, the odometer carries on). Positions relative to the origin come out as `Estimate`s, possibly several per
+push (a halved step emits the shorter position and then the rest of the buffer as it becomes due).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mission.plugin_api import StereoImages
+from perception_plugins.vo.adaptive import (
+    common_view_mask,
+    field_of_view_along,
+    overlap_displacement,
+    step_frames,
+    step_time,
+)
+from perception_plugins.vo.chain import Chain
+from perception_plugins.vo.classic import ClassicMatcher
+from perception_plugins.vo.errors import VoError
+from perception_plugins.vo.frontend import Array, Frontend
+from perception_plugins.vo.klt import KltTracker
+from perception_plugins.vo.network import NetworkSettings, ReferenceNetwork
+from perception_plugins.vo.se3 import from_rotvec_translation, invert, to_rotvec
+
+
+@dataclass(frozen=True)
+class OdometerSettings:
+    """How the odometer works; `methods.settings_for` builds these for the named methods."""
+
+    frontend: Literal["klt", "classic"] = "klt"
+    step: int = 1
+    """Frames per step (fixed step); the first step of the adaptive mode."""
+    fragment_steps: int = 4
+    """Steps per KLT fragment (a fragment also ends early when its survivors fall below `refresh_features`)."""
+    adaptive: bool = False
+    overlap_percent: float = 85.0
+    """P: the share of the view two processed positions keep in common (adaptive mode)."""
+    max_step: int = 32
+    min_features: int = 50
+    """Features a step needs; below it the adaptive step is halved (30–100 in the seed's experiments)."""
+    min_track: int = 12
+    """Fewer inliers than this is a tracking loss."""
+    refresh_features: int = 120
+    """A KLT fragment ends early when fewer features survive."""
+    features: int = 500
+    crop: bool = True
+    """Adaptive mode: generate features only where the next position is predicted to see too (third mechanism)."""
+    threshold_px: float = 1.5
+    fps: float | None = None
+    """Frame rate for the adaptive step; from the frames' times when None."""
+    altitude: float | None = None
+    """R for the adaptive step; the keyframe's median depth when None."""
+    network: NetworkSettings | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class Estimate:
+    """The pose of a processed frame relative to the origin (frame index as pushed)."""
+
+    index: int
+    T_origin_cam: Array
+    tracked: int
+    lost: bool = False
+    bound_to: int | None = None
+    """The frame index of the reference frame this position was bound to, if it was."""
+
+
+@dataclass
+class _Position:
+    index: int
+    time: float
+    T_origin: Array
+
+
+@dataclass
+class OdometerStats:
+    positions: int = 0
+    losses: int = 0
+    halvings: int = 0
+    fragments: int = 0
+    bindings: int = 0
+    steps: list[int] = field(default_factory=list)
+
+
+class Odometer:
+    """Stereo visual odometry over a stream of frames (see the module docstring)."""
+
+    def __init__(self, settings: OdometerSettings | None = None) -> None:
+        self.settings = s = settings or OdometerSettings()
+        if s.step < 1 or s.max_step < 1 or s.fragment_steps < 1:
+            raise VoError("step, max_step and fragment_steps must be at least 1")
+        self.frontend: Frontend = (KltTracker(s.features, s.threshold_px) if s.frontend == "klt"
+                                   else ClassicMatcher(2 * s.features, s.threshold_px))
+        self.network = ReferenceNetwork(s.network) if s.network is not None else None
+        self.stats = OdometerStats()
+        self._buffer: list[tuple[int, StereoImages]] = []
+        self._key: _Position | None = None
+        self._last: _Position | None = None
+        self._chain = Chain.origin()
+        self._in_fragment = 0
+        self._velocity: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None  # (rad/s, m/s) in camera
+        self._speeds: list[float] = []
+        self._last_dt = 0.0
+        self._target = s.step
+        self._depth: float | None = None
+        self._fps = s.fps
+        self._K: Array = np.eye(3)
+        self._size = (0, 0)
+
+    # ---- public -------------------------------------------------------------------------------------------------
+    def push(self, index: int, frame: StereoImages, altitude: float | None = None) -> list[Estimate]:
+        """Feed the next frame; returns the positions this frame made due (none when the step skips it)."""
+        if altitude is not None:
+            self._depth = altitude
+        if self._key is None:
+            return [self._start(index, frame)]
+        if self._fps is None and self._last is not None and frame.time > self._last.time and index > self._last.index:
+            self._fps = (index - self._last.index) / (frame.time - self._last.time)
+        self._buffer.append((index, frame))
+        out: list[Estimate] = []
+        while self._buffer and len(self._buffer) >= self._target:
+            out.append(self._advance(self._target))
+        return out
+
+    def finish(self) -> list[Estimate]:
+        """Process what is left in the buffer (its last frame becomes a position)."""
+        out: list[Estimate] = []
+        while self._buffer:
+            out.append(self._advance(min(self._target, len(self._buffer))))
+        return out
+
+    def pending(self) -> int:
+        return len(self._buffer)
+
+    # ---- steps --------------------------------------------------------------------------------------------------
+    def _start(self, index: int, frame: StereoImages) -> Estimate:
+        self.frontend.start(frame)
+        self._K, self._size = frame.K, (frame.left.shape[1], frame.left.shape[0])
+        self._key = self._last = _Position(index, frame.time, np.eye(4))
+        self._chain = Chain.origin()
+        self.stats.positions += 1
+        self._update_depth()
+        if self.network is not None:
+            self.network.offer(index, frame, self._chain, self.frontend.key_points)
+        return Estimate(index, np.eye(4), len(self.frontend.key_points))
+
+    def _predict(self, dt: float) -> Array:
+        if self._velocity is None:
+            return np.eye(4)
+        w, v = self._velocity
+        return from_rotvec_translation(w * dt, v * dt)
+
+    def _advance(self, n: int) -> Estimate:
+        s = self.settings
+        assert self._key is not None and self._last is not None
+        key, last = self._key, self._last
+        while True:
+            index, frame = self._buffer[n - 1]
+            dt = self._dt(last, index, frame)
+            T_last_b_pred = self._predict(dt)
+            T_key_pred = invert(key.T_origin) @ last.T_origin @ T_last_b_pred
+            step = self.frontend.track(frame, T_key_pred)
+            if step is not None and step.count >= s.min_features:
+                break
+            if s.adaptive and n > 1:
+                n //= 2
+                self.stats.halvings += 1
+                continue
+            break
+        del self._buffer[:n]
+        self.stats.positions += 1
+        self.stats.steps.append(index - last.index)
+        if step is None or step.count < s.min_track:
+            # Tracking lost: dead-reckon this position and start a new fragment from it.
+            self.stats.losses += 1
+            T_origin_b = last.T_origin @ T_last_b_pred
+            self._chain = self._chain.append(invert(key.T_origin) @ T_origin_b)
+            self._restart(index, frame, T_origin_b)
+            self._target = max(1, min(self._target, s.step))
+            return Estimate(index, T_origin_b, 0, lost=True)
+        self._in_fragment += 1
+        end = (s.frontend == "classic" or s.adaptive or self._in_fragment >= s.fragment_steps
+               or step.count < s.refresh_features)
+        T_key_b = self.frontend.commit(frame, step, end)
+        T_origin_b = key.T_origin @ T_key_b
+        self._remember_motion(invert(last.T_origin) @ T_origin_b, dt)
+        bound = None
+        if end:
+            self._chain = self._chain.append(T_key_b)
+            self._next_target()
+            mask = self._crop_mask(frame) if s.adaptive and s.crop else None
+            self.frontend.start(frame, mask)
+            self._update_depth()
+            self._in_fragment = 0
+            self.stats.fragments += 1
+            if self.network is not None:
+                binding = self.network.offer(index, frame, self._chain, self.frontend.key_points)
+                if binding is not None:
+                    self._chain, bound = binding.chain, binding.reference
+                    T_origin_b = self._chain.pose()
+                    self.stats.bindings += 1
+            self._key = _Position(index, frame.time, T_origin_b)
+        else:
+            self._next_target()
+        self._last = _Position(index, frame.time, T_origin_b)
+        return Estimate(index, T_origin_b, step.count, bound_to=bound)
+
+    def _restart(self, index: int, frame: StereoImages, T_origin_b: Array) -> None:
+        self.frontend.start(frame)
+        self._update_depth()
+        self._in_fragment = 0
+        self._key = self._last = _Position(index, frame.time, T_origin_b)
+
+    def _dt(self, last: _Position, index: int, frame: StereoImages) -> float:
+        if frame.time > last.time:
+            return frame.time - last.time
+        return (index - last.index) / (self._fps or 10.0)
+
+    def _remember_motion(self, T_last_b: Array, dt: float) -> None:
+        if dt <= 0:
+            return
+        self._velocity = (to_rotvec(T_last_b[:3, :3]) / dt, T_last_b[:3, 3] / dt)
+        self._speeds.append(float(np.linalg.norm(T_last_b[:3, 3])) / dt)
+        self._speeds = self._speeds[-2:]
+        self._last_dt = dt
+
+    def _update_depth(self) -> None:
+        if self.settings.altitude is not None:
+            self._depth = self.settings.altitude
+        elif len(self.frontend.key_points) >= 8:
+            self._depth = float(np.median(self.frontend.key_points[:, 2]))
+
+    # ---- the adaptive step ----------------------------------------------------------------------------------------
+    def _next_target(self) -> None:
+        s = self.settings
+        if not s.adaptive:
+            self._target = s.step
+            return
+        if self._velocity is None or self._depth is None or not self._speeds or self._fps is None:
+            self._target = s.step
+            return
+        K, size = self._K_size()
+        alpha, axial = field_of_view_along(K, size, self._velocity[1])
+        S = overlap_displacement(alpha, self._depth, s.overlap_percent, axial)
+        V = self._speeds[-1]
+        A = (self._speeds[-1] - self._speeds[-2]) / self._last_dt if len(self._speeds) == 2 and self._last_dt > 0 \
+            else 0.0
+        self._target = step_frames(step_time(S, V, A), self._fps, s.max_step)
+
+    def _K_size(self) -> tuple[Array, tuple[int, int]]:
+        return self._K, self._size
+
+    def _crop_mask(self, frame: StereoImages) -> NDArray[np.uint8] | None:
+        if self._velocity is None or self._depth is None:
+            return None
+        h, w = frame.left.shape[:2]
+        dt = self._target / (self._fps or 10.0)
+        return common_view_mask(frame.K, (w, h), self._predict(dt), self._depth)
+
+
+__all__ = ["Estimate", "Odometer", "OdometerSettings", "OdometerStats"]

@@ -1,0 +1,130 @@
+"""The tasks of a cell plan for one line direction (seed 002 §2.1): the boustrophedon cells' meanders, the passes
+round the zones, and their order.
+
+A task is flown by exactly one of its variants (start side, direction, entry point). The cells come from the
+sweep's decomposition; the headland rings (if any) and the contour passes the lines leave needed are added
+(`cell_tasks`); the lines are then cut back to what those passes leave uncovered, and the cells re-planned on the
+cut lines when that keeps the coverage (`trimmed`). The order of the tasks and their variants minimises the
+transits (`order_tasks`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from numpy.typing import NDArray
+
+from .cells import cell_variants, decompose
+from .contours import contour_runs
+from .frames import from_sweep, to_sweep
+from .joins import Joiner
+from .metrics import swept, uncovered
+from .ordering import order_variants
+from .runs import Run
+from .scene import Scene
+from .sweep import Sweep
+from .trims import trim_to_need
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Tasks:
+    """The tasks of one line direction: each a list of variants (runs in (forward, backward) pairs)."""
+
+    sweep: Sweep
+    cells: list[list[Run]]          # the cells' meanders
+    extra: list[list[Run]]          # headland rings and contour passes
+
+    @property
+    def all(self) -> list[list[Run]]:
+        return self.cells + self.extra
+
+    def rough_length(self) -> float:
+        """The tasks' own lengths (the shortest variant of each) plus a spacing per transit: a cheap score to
+        choose which line directions to order in full."""
+        tasks = self.all
+        return sum(min(r.length for r in v) for v in tasks) + self.sweep.spacing * max(len(tasks) - 1, 0)
+
+
+def cell_tasks(scene: Scene, sweep: Sweep, tolerance: float, rings: Sequence[list[Run]] = ()) -> Tasks:
+    """The cells of `sweep`, the headland `rings`, and the contour passes needed so that at most `tolerance` of the
+    free area is left uncovered."""
+    if not sweep.pieces:
+        raise ValueError("no survey line fits in the area outside the no-go zones")
+    cells = cell_variants(Joiner(scene, sweep), decompose(sweep))
+    if not scene.has_zones:
+        return Tasks(sweep, cells, [])
+    # what the lines cover whichever start side each cell is flown from (turns may pull line ends back)
+    flown = common_lines(cells, sweep.heading_deg) + [seg for variants in rings for seg in variants[0].lines]
+    residual = scene.free.difference(swept(flown, scene.swath))
+    extra = [list(variants) for variants in rings]
+    extra += [[c, c.reversed()] for c in contour_runs(scene, residual, sweep.spacing, tolerance)]
+    return Tasks(sweep, cells, extra)
+
+
+def order_tasks(scene: Scene, tasks: Sequence[list[Run]], start: Array | None = None,
+                finish: Array | None = None) -> list[Run]:
+    """One variant of every task, in flying order, minimising the transits plus the approach from `start` and the
+    way to `finish` (x, y)."""
+    runs: list[Run] = [r for variants in tasks for r in variants]
+    task_of = np.array([t for t, variants in enumerate(tasks) for _ in variants], dtype=np.int64)
+    reverse_of = np.arange(len(runs), dtype=np.int64) ^ 1           # variants come in (forward, backward) pairs
+    entries = np.array([r.path[0] for r in runs])
+    exits = np.array([r.path[-1] for r in runs])
+    cost = scene.transit_costs(exits, np.array([r.exit_angle for r in runs]), entries,
+                               np.array([r.entry_angle for r in runs]))
+    cost[task_of[:, None] == task_of[None, :]] = np.inf
+    start_cost = np.zeros(len(runs)) if start is None else scene.router.lengths(start, entries)[0]
+    finish_cost = np.zeros(len(runs)) if finish is None else scene.router.lengths(exits, finish)[:, 0]
+    order = order_variants(task_of, reverse_of, cost, start_cost, finish_cost)
+    return [runs[v] for v in order]
+
+
+def covers(scene: Scene, runs: Sequence[Run], tolerance: float) -> bool:
+    """Whether the passes of `runs` leave at most `tolerance` of the free area uncovered."""
+    lines = [seg for run in runs for seg in run.lines]
+    return bool(uncovered(lines, scene.free, scene.swath).area <= tolerance * scene.free.area * (1.0 + 1e-6))
+
+
+def trimmed(scene: Scene, plan: Tasks, tolerance: float) -> Tasks:
+    """The cells re-planned with their lines cut back to what the other passes leave uncovered, if that keeps the
+    coverage (at most `tolerance` of the free area, or what the uncut lines left, uncovered); else `plan`."""
+    sweep, tasks = plan.sweep, plan.cells
+    others = [seg for variants in plan.extra for seg in variants[0].lines]
+    if not others:
+        return plan
+    try:
+        covered = swept(others, scene.swath)
+        need = scene.free.difference(covered)
+        cut = trim_to_need(sweep, need, covered)
+    except shapely.errors.GEOSException:          # cutting is an optimisation: a topology failure keeps the lines
+        return plan
+    if cut.pieces == sweep.pieces or not cut.pieces:
+        return plan
+    cut_tasks = cell_variants(Joiner(scene, cut), decompose(cut))
+
+    def left(cells: list[list[Run]]) -> float:
+        return float(need.difference(swept(common_lines(cells, sweep.heading_deg), scene.swath)).area)
+
+    missed = left(cut_tasks)
+    if missed > tolerance * scene.free.area + 1e-6 and missed > left(tasks) + 1e-6:
+        return plan
+    return Tasks(cut, cut_tasks, plan.extra)
+
+
+def common_lines(tasks: list[list[Run]], heading_deg: float) -> list[Array]:
+    """Each cell's lines shortened to the part every variant of the cell flies."""
+    out = []
+    for variants in tasks:
+        forward = variants[0::2]
+        for j in range(len(forward[0].lines)):
+            uv = [to_sweep(run.lines[j], heading_deg) for run in forward]
+            lo = max(float(seg[:, 0].min()) for seg in uv)
+            hi = min(float(seg[:, 0].max()) for seg in uv)
+            if hi > lo:
+                out.append(from_sweep(np.array([[lo, uv[0][0, 1]], [hi, uv[0][0, 1]]]), heading_deg))
+    return out

@@ -1,0 +1,107 @@
+"""Cell plans round no-go zones (seed 002 §2.1): lines cut back where contour passes already cover their band,
+passes round the zones (headlands), the order of the tasks, and coverage of areas with holes."""
+
+import numpy as np
+import shapely
+from shapely.geometry import LineString, Polygon, box
+
+from planners.coverage import baseline_boustrophedon, coverage_fraction, meander
+from planners.coverage.headlands import core_region, headland_rings, headland_tasks
+from planners.coverage.metrics import swept
+from planners.coverage.ordering import order_variants, tour_cost
+from planners.coverage.scene import Scene
+from planners.coverage.sweep import build_sweep
+from planners.coverage.tasks import cell_tasks, common_lines, trimmed
+from planners.coverage.trims import trim_to_need
+
+SPACING = 50.0
+SWATH = SPACING / 0.8                                       # 20 % overlap
+WIDE = [[0, 0], [0, 1200], [600, 1200], [600, 0]]           # 600 m north × 1200 m east
+BLOCK = [[150, 400], [150, 800], [450, 800], [450, 400]]    # splits the middle six east-west lines
+
+
+def xy(poly):
+    return Polygon([(e, n) for n, e in poly])
+
+
+def circumradii(points):
+    a, b, c = points[:-2], points[1:-1], points[2:]
+    ab, bc, ca = (np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1), np.linalg.norm(a - c, axis=1))
+    cross = np.abs((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(cross < 1e-9, np.inf, ab * bc * ca / (2.0 * cross))
+
+
+def test_a_line_whose_band_another_pass_covers_is_cut_back_or_dropped():
+    sweep = build_sweep(box(0, 0, 400, 150), Polygon(), 90.0, 50.0)             # three rows of lines running east
+    need = box(0, 0, 250, 50).union(box(0, 100, 400, 150))                       # row 0 half covered, row 1 covered
+    cut = trim_to_need(sweep, need)
+    assert [(p.row, round(p.u0), round(p.u1)) for p in cut.pieces] == [(0, 0, 250), (2, 0, 400)]
+    assert cut.links == ()                                                        # rows 0 and 2 never touched
+
+
+def test_lines_next_to_the_contour_passes_are_shortened_and_the_area_stays_covered():
+    scene = Scene.build(WIDE, [BLOCK], 6.0, 2.0, SWATH)
+    sweep = build_sweep(scene.region, scene.forbidden, 90.0, SPACING)
+    full = cell_tasks(scene, sweep, 1e-3)
+    cut = trimmed(scene, full, 1e-3)
+
+    def line_length(tasks):
+        return sum(float(np.linalg.norm(s[1] - s[0])) for s in common_lines(tasks.cells, 90.0))
+
+    # the passes along the zone's west and east sides cover half a swath beyond the standoff; the twelve line ends
+    # next to them give up most of it
+    assert line_length(full) - line_length(cut) > 12 * 0.3 * SWATH
+    passes = common_lines(cut.cells, 90.0) + [s for variants in cut.extra for s in variants[0].lines]
+    assert scene.free.difference(swept(passes, SWATH)).area <= 1e-3 * scene.free.area + 1e-6
+
+
+def test_headland_rings_keep_the_standoff_and_turn_no_tighter_than_the_radius():
+    zones = [BLOCK, [[60, 100], [60, 200], [120, 150]]]
+    scene = Scene.build(WIDE, zones, 6.0, 2.0, SWATH)
+    rings = headland_rings(scene)
+    assert len(rings) == 2
+    for ring in rings:
+        assert shapely.distance(LineString(ring), scene.zones) >= scene.standoff - 0.5
+        assert circumradii(ring).min() >= 0.95 * 6.0
+    core = core_region(scene, [variants[0] for variants in headland_tasks(scene)])
+    # the ring's passes, at the standoff, cover 0.4 swath beyond it (the core reaches 0.1 swath under them)
+    assert [core.contains(shapely.Point(600, 150 - d)) for d in (scene.standoff + 0.35 * SWATH, 50.0)] == [
+        False, True]
+
+
+def test_cells_beat_the_single_direction_sweep_where_a_zone_splits_the_lines():
+    # the single-direction sweep flies six east-west lines that the block splits, each with a detour round the block
+    # or a double back; the cells fly the strips north and south and the sides west and east as their own meanders
+    plan = meander(WIDE, [BLOCK], spacing=SPACING, turn_radius=6.0, swath=SWATH)
+    base = baseline_boustrophedon(WIDE, [BLOCK], SPACING, 6.0, swath=SWATH)
+    assert plan.method == "boustrophedon-cells" and plan.cells >= 4
+    assert plan.length_m <= 0.88 * base.length_m
+    assert coverage_fraction(plan, WIDE, [BLOCK], SWATH) >= 0.999
+
+
+def test_an_area_with_several_holes_is_covered_and_no_hole_is_entered():
+    u_shape = [[0, 0], [0, 900], [700, 900], [700, 600], [250, 600], [250, 300], [700, 300], [700, 0]]
+    holes = [[[60, 80], [60, 200], [180, 200], [180, 80]],
+             [[400, 700], [400, 820], [520, 760]],
+             [[80, 420], [80, 480], [170, 480], [170, 420]]]
+    plan = meander(u_shape, holes, spacing=SPACING, turn_radius=6.0, swath=SWATH)
+    assert coverage_fraction(plan, u_shape, holes, SWATH) >= 0.995
+    path = LineString(plan.waypoints[:, ::-1])
+    for hole in holes:
+        assert shapely.distance(path, xy(hole)) >= 0.9                          # half the default clearance
+    assert plan.length_m <= baseline_boustrophedon(u_shape, holes, SPACING, 6.0, swath=SWATH).length_m + 1e-6
+
+
+def test_large_orderings_fall_back_to_the_heuristic_and_still_fly_every_task_once():
+    rng = np.random.default_rng(3)
+    n_tasks, per = 12, 8                                    # too many variants for the exact search
+    pts = rng.uniform(0, 1000, size=(n_tasks * per, 2))
+    cost = np.linalg.norm(pts[:, None] - pts[None], axis=2)
+    task_of = np.repeat(np.arange(n_tasks), per)
+    cost[task_of[:, None] == task_of[None, :]] = np.inf
+    order = order_variants(task_of, np.arange(n_tasks * per) ^ 1, cost, np.zeros(len(pts)), np.zeros(len(pts)))
+    assert sorted(task_of[order].tolist()) == list(range(n_tasks))
+    nearest = [int(np.argmin(np.where(task_of == t, 0.0, np.inf))) for t in range(n_tasks)]
+    assert tour_cost(order, cost, np.zeros(len(pts)), np.zeros(len(pts))) < tour_cost(
+        nearest, cost, np.zeros(len(pts)), np.zeros(len(pts)))
