@@ -39,7 +39,10 @@ def test_same_seed_same_run_other_seed_other_run(tmp_path):
     assert a == b and a != c
 
 
-def test_simulate_refuses_unsupported_kinds_in_one_line(write_mission, tmp_path, capsys):
+def test_simulate_refuses_unsupported_kinds_in_one_line(write_mission, tmp_path, capsys, monkeypatch):
+    from mission.agents import REGISTRY
+
+    monkeypatch.delitem(REGISTRY, "explore")  # every kind has an agent now: pretend this one has none
     route = """
   - id: go
     transit: {to: {north: 30, east: 30}, depth: 10}

@@ -103,7 +103,8 @@ def test_simulate_writes_events_while_running(write_mission, tmp_path, monkeypat
     assert seen[0] >= 1 and seen[1] > seen[0]  # mission_started, then the first element's events, on disk
 
 
-def test_unsupported_kinds_are_refused_before_anything_starts(write_mission):
+def test_unsupported_kinds_are_refused_before_anything_starts(write_mission, monkeypatch):
+    monkeypatch.delitem(REGISTRY, "explore")  # every kind has an agent now: pretend this one has none
     route = ROUTE + """
   - id: look
     explore: {object: detected, sensor: scanner}

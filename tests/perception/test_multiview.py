@@ -77,6 +77,19 @@ def test_a_vertical_base_segment_is_refused() -> None:
         object_frame([0.0, 0, 4], [0.0, 0, 3], [0.0, 0, 1])
 
 
+def test_the_package_imports_no_mission_internals() -> None:
+    import subprocess
+    import sys
+
+    code = ("import sys, perception_plugins.multiview, perception_plugins.multiview.model_io; "
+            "bad = [m for m in sys.modules if m.split('.')[0] in ('mission', 'planners', 'mujoco')]; "
+            "assert not bad, bad; import mission.plugin_api; contract = set(sys.modules); "
+            "import perception_plugins.multiview.plugin; "
+            "bad = [m for m in set(sys.modules) - contract if m.split('.')[0] in ('mission', 'planners')]; "
+            "assert not bad, bad")
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)
+
+
 def test_malformed_edits_are_reported_with_their_place() -> None:
     with pytest.raises(MultiviewError, match=r"views.000010.add_edges\[0\]"):
         parse_edits({"views": {"000010": {"add_edges": [[1, 2]]}}})
@@ -273,3 +286,38 @@ def test_the_plug_in_references_the_camera_in_the_database_frame(scene: Scene, t
     with pytest.raises(MultiviewError, match="no multi-view model"):
         plugin.process(StereoImages(0.0, frame.left, frame.right, frame.K, frame.baseline),
                        ReferencingRequest((PointSetModel("wellhead-x", "any", np.zeros((3, 3))),), prior))
+
+
+def test_an_operators_edits_pick_the_base_remove_and_add_points_and_edges(scene: Scene) -> None:
+    from perception_plugins.multiview.formation import FormationSettings, view_elements
+
+    view = scene.views[1]
+    plain = view_elements(view, FormationSettings(), parse_edits(None).for_view(view.name))
+    segments = plain[3]
+    base, other = segments[2], segments[0]
+    frame = scene.exp.camera.render(scene.truth[view.name])
+    # A textured roof pixel away from every detected point, to add; a cluster of points, to remove.
+    uv_pts = plain[1]
+    candidates = np.array([[u, v] for u in range(300, 900, 37) for v in range(250, 650, 41)], dtype=float)
+    gap = np.min(np.linalg.norm(candidates[:, None] - uv_pts[None], axis=2), axis=1)
+    add = candidates[int(np.argmax(gap))]
+    remove_at = uv_pts[0]
+    edits = parse_edits({
+        "base": {"view": view.name, "edge": base.uv_left.tolist()},
+        "views": {view.name: {"remove_points": [{"at": remove_at.tolist(), "radius": 40}],
+                              "add_points": [add.tolist()],
+                              "remove_edges": [other.uv_left.mean(axis=0).tolist()],
+                              "add_edges": [other.uv_left.tolist()]}}})
+    model = build_model("manifold-1", [view], edits)
+    v = model.views[0]
+    assert np.allclose(model.base_segment[0], 0.0, atol=1e-9)                  # P1 of the picked edge is the origin
+    assert np.linalg.norm(model.base_segment[1]) == pytest.approx(base.length, rel=1e-6)
+    assert not np.any(np.linalg.norm(v.uv_left - remove_at, axis=1) <= 40)
+    k = int(np.argmin(np.linalg.norm(v.uv_left - add, axis=1)))
+    assert np.allclose(v.uv_left[k], add)
+    u, w = np.rint(add).astype(int)
+    assert v.points[k, 2] == pytest.approx(float(frame.depth_left[w, u]), abs=0.02)   # triangulated where it is
+    assert len(v.segments) == len(segments)                                       # one removed, one added back
+    readded = v.segments[-1]
+    assert np.allclose(readded.uv_left, other.uv_left)
+    assert np.max(np.linalg.norm(readded.points - other.points, axis=1)) <= 0.02
