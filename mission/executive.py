@@ -18,6 +18,7 @@ from mission.knowledge import Knowledge
 from mission.language.models import Mission, RouteElement, Transit
 from mission.plugin_host import PluginHost
 from mission.safety import SafetyMonitors, Violation
+from mission.strategy import inspection_run, order_objects
 from mission.vehicle import Command, NavState, Vehicle
 
 MARGIN_S = 120.0  # extra time every default timeout allows
@@ -202,7 +203,17 @@ class Executive:
         self.report.start_time = nav.time
         self.emit("mission_started", nav.time, mission=m.name, elements=[e.id for e in m.route])
         abort_reason = ""
-        for element in m.route:
+        route = list(m.route)
+        for index in range(len(route)):
+            end = inspection_run(route, index)
+            if end - index >= 2 and (index == 0 or route[index - 1].inspect is None):
+                nav = self.vehicle.observe().nav
+                ordered = order_objects(m, route[index:end], nav.north, nav.east, m.seed)
+                if ordered != route[index:end]:
+                    route[index:end] = ordered
+                    self.emit("route_reordered", nav.time, elements=[e.id for e in route],
+                              reason="inspections in the shortest visiting order")
+            element = route[index]
             if abort_reason:
                 self.report.elements.append(ElementReport(element.id, element.kind, "skipped"))
                 continue
