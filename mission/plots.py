@@ -6,6 +6,9 @@
     navigation.png   horizontal navigation error against the filter's σ, with dead-reckoning spans and fixes
     survey_ID.png    per survey element: sensed depth and passes, information map, detections over the truth
     explore_ID.png   per explore element: voxel model, views and path (plan, elevation), explored volume over time
+    photos_ID.png    per photo-survey explore element: passes, photo points and footprints over the object
+    inspect_ID.png   per inspect element: sets, targets, the (re-)planned order and the flown path in the object
+                     frame, with the camera's true position at each photograph
 
 Plan views draw east to the right and north up at equal scale; depth axes grow downwards.
 """
@@ -48,8 +51,12 @@ def plot_run(folder: Path, out_dir: Path | None = None) -> list[Path]:
     for element, products in run.maps.items():
         if "info" in products:
             drawers.append((f"survey_{element}.png", _survey_drawer(run, element, products, scene)))
-        if "explore_views" in products:
-            drawers.append((f"explore_{element}.png", _explore_drawer(run, element, products, scene)))
+        if "explore_views" in products or "photo_index" in products:
+            prefix = "explore" if "explore_views" in products else "photos"
+            drawers.append((f"{prefix}_{element}.png", _explore_drawer(run, element, products, scene)))
+    for item in run.metrics.get("elements", []):
+        if item.get("kind") == "inspect" and item.get("object"):
+            drawers.append((f"inspect_{item['id']}.png", _inspect_drawer(run, item, scene)))
     paths = []
     for name, draw in drawers:
         draw().savefig(out / name, dpi=DPI)  # a bare Figure: no pyplot state, no global backend change
@@ -59,10 +66,17 @@ def plot_run(folder: Path, out_dir: Path | None = None) -> list[Path]:
 
 def _explore_drawer(run: RunData, element: str, products: dict[str, np.ndarray], scene: Scene | None
                     ) -> Callable[[], Figure]:
-    from mission.explore_plots import explore_figure
+    from mission.explore_plots import explore_figure, photo_figure
 
     item: dict[str, Any] = next((e for e in run.metrics.get("elements", []) if e.get("id") == element), {})
-    return lambda: explore_figure(element, products, item, scene)
+    draw = explore_figure if "explore_views" in products else photo_figure
+    return lambda: draw(element, products, item, scene)
+
+
+def _inspect_drawer(run: RunData, item: dict[str, Any], scene: Scene | None) -> Callable[[], Figure]:
+    from mission.inspect_plots import inspect_figure
+
+    return lambda: inspect_figure(item["id"], item, run.mission, run.trajectory, run.elements, scene)
 
 
 def _survey_drawer(run: RunData, element: str, products: dict[str, np.ndarray], scene: Scene | None

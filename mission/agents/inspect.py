@@ -341,6 +341,12 @@ class InspectAgent(Agent):
             return
         self.T_wo = T_world_cam @ result.T_cam_object
         if self.stage == "search":
+            if result.set_id is not None and result.set_id != self.set_id:
+                # Referenced through the set that is in view; the planned one keeps its turn, now with a prior.
+                self.context.emit("set_switched", nav.time, element=self.context.element.id, planned=self.set_id,
+                                  recognised=result.set_id)
+                self.queue.insert(0, ("set", self.set_id))
+                self.set_id = str(result.set_id)
             self.stage, self.goals, self.goal_index, self.phase = "fine", [self._over_set(
                 self.set_id, FINE_ALTITUDE_M)], 0, "go"
             return
