@@ -153,6 +153,7 @@ def _model_build(args: argparse.Namespace) -> int:
     report = build_from_run(args.run, args.object, views, args.edits, args.out, args.extend)
     print(f"{report.path}: {args.object} from views {', '.join(report.views)}; full model "
           f"{report.full['points']} points, {report.full['lines']} lines, {report.full['corners']} corners")
+    print(f"  object frame in the database frame: {report.database_tie}")
     for row in report.table:
         print(f"  view {row['view']}: {row['points']} points, {row['lines']} lines, {row['corners']} corners")
     return 0

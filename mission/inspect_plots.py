@@ -52,9 +52,9 @@ def inspect_figure(element: str, item: dict[str, Any], mission: Mission, traject
         if stop[0] == "replan":
             chains.append([])
             continue
-        p = _stop_position(mission, obj.id, stop)
-        if p is not None:
-            chains[-1].append(p)
+        position = _stop_position(mission, obj.id, stop)
+        if position is not None:
+            chains[-1].append(position)
     for i, chain in enumerate(chains):
         if len(chain) >= 2:
             c = np.array(chain)

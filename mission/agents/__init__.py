@@ -30,5 +30,5 @@ def create_agent(kind: str) -> Agent:
     return REGISTRY[kind]()
 
 
-__all__ = ["Agent", "AgentContext", "ExploreAgent", "InspectAgent", "REGISTRY", "ReferenceAgent", "Status", "SurveyAgent", "TransitAgent",
-           "create_agent", "supported_kinds"]
+__all__ = ["Agent", "AgentContext", "ExploreAgent", "InspectAgent", "REGISTRY", "ReferenceAgent",
+           "Status", "SurveyAgent", "TransitAgent", "create_agent", "supported_kinds"]

@@ -4,9 +4,12 @@
 
 1. approach: cruise at a depth clear of the object to above a safe starting view, picked in the safety grid of a
    voxel map seeded from the survey's height map (`explore_region.prior_map`), then descend onto it;
-2. loop: every scanner frame goes into the voxel map at the *estimated* pose (`planners.nbv.NbvPlanner.integrate`);
+2. loop: scanner frames go into the voxel map at the *estimated* pose (`planners.nbv.NbvPlanner.integrate`;
+   frames from nearly the same pose as the last are not fused: they cost as much and add little);
    at each view the planner proposes the next (candidates near the safe shell around the known structure, in
-   free space, visibility by ray-casting the scanner frustum, the seed's utility with the mission's weights);
+   free space, visibility by ray-casting the scanner frustum, the seed's utility with the mission's weights, the
+   frontier and contour terms counted over the object's region until it has nothing left to reveal, then over
+   the whole box: `FixedMountNbv`);
    the vehicle flies there on a safe path (`planners.nbv.connect`: straight when safe, else RRT* of
    `planners.rrt`), station keeping along it (`station_path.StationPath`) with the scanner pointed at the view's
    heading; a path that a later frame shows unsafe is abandoned and a new view proposed;
@@ -29,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mission.agents.base import Agent, AgentContext
+from mission.agents.base import Agent, AgentContext, Status
 from mission.agents.explore_region import (
     Target,
     exploration_box,
@@ -44,7 +47,7 @@ from mission.language.models import Explore
 from mission.vehicle import Command, NavState, Observation, ScanFrame
 from planners.nbv import NbvPlanner, Scan, Scanner, View, Views, Weights, candidate_views, connect, segment_safe
 from planners.nbv.candidates import is_safe_view
-from planners.nbv.grid import FREE, UNKNOWN
+from planners.nbv.grid import FREE, UNKNOWN, StateGrid
 from planners.nbv.utility import view_utility
 
 RESOLUTION_M = 0.25
@@ -55,6 +58,9 @@ MAX_REJECTIONS = 10
 HEADING_TOLERANCE_DEG = 6.0
 CLIMB_RATE = 0.35  # m/s, a conservative figure for the time needed to climb away at the end
 APPROACH_HANDOVER_M = 2.0
+PRIOR_UNCERTAIN_M = 0.5  # the survey's soundings are 0.5 m cell means: the last 0.5 m above them stays unknown
+MIN_UNKNOWN = 4  # a view that would reveal fewer unknown voxels of the object's region is not worth the move
+FOCUS_MARGIN_M = 1.5  # the object's region: its footprint's circle and its height grown by this much
 MIN_FRAME_MOVE_M = 0.4  # a frame is fused into the planner's map when the vehicle has moved or turned this much
 MIN_FRAME_TURN_DEG = 5.0  # cruising ends, station keeping begins, this far from the point above the start view
 
@@ -62,16 +68,33 @@ MIN_FRAME_TURN_DEG = 5.0  # cruising ends, station keeping begins, this far from
 @dataclass
 class FixedMountNbv(NbvPlanner):
     """`NbvPlanner` for a scanner fixed to the hull: every candidate has the mount's pitch (the vehicle can turn
-    to any heading but keeps its pitch)."""
+    to any heading but keeps its pitch).
+
+    With a `focus` (a boolean mask over the state grid: the object's region), the frontier and contour terms count
+    the object only: unknown voxels outside the focus (the seabed's shadows around it, which the survey left and
+    no view of the object needs) are free for visibility, and only contour voxels inside it count and anchor
+    candidates. Safety is unchanged: candidates and paths use the true states' safety grid, where unknown space
+    is an obstacle.
+    """
 
     pitch_deg: float = -25.0
+    focus: np.ndarray | None = None
+
+    def focused(self) -> tuple[StateGrid, np.ndarray]:
+        """The state grid the utility sees, and the contour ids that count."""
+        contour = self.derived.contour_ids()
+        if self.focus is None:
+            return self.grid, contour
+        states = self.grid.states.copy()
+        states[(states == UNKNOWN) & ~self.focus] = FREE
+        return StateGrid(states, self.grid.key_lo, self.grid.resolution), contour[self.focus.reshape(-1)[contour]]
 
     def propose(self, pose: View) -> View | None:
         from planners.nbv.planner import Proposal
 
         t0 = time.perf_counter()
-        contour = self.derived.contour_ids()
-        views = candidate_views(self.grid, self.safety, pose.point, self.scanner, count=self.candidates,
+        grid, contour = self.focused()
+        views = candidate_views(grid, self.safety, pose.point, self.scanner, count=self.candidates,
                                 safe_distance=self.safe_distance, band=self.band, rng=self.rng, contour=contour,
                                 max_rounds=self.candidate_rounds)
         views = Views(views.positions, views.heading_deg, np.full(len(views), self.pitch_deg))
@@ -82,13 +105,23 @@ class FixedMountNbv(NbvPlanner):
         if not len(views):
             self.last = Proposal(views, None, -1, time.perf_counter() - t0)
             return None
-        terms = view_utility(self.grid, views, pose.point, self.scanner, self.weights, min_overlap=self.min_overlap,
+        terms = view_utility(grid, views, pose.point, self.scanner, self.weights, min_overlap=self.min_overlap,
                              contour=contour)
         best = int(np.argmax(np.where((terms.f > 0) | (terms.ct > 0), terms.u, -1.0)))
         self.last = Proposal(views, terms, best, time.perf_counter() - t0)
         if terms.f.max() < self.min_unknown:
             return None
         return views[best]
+
+
+def object_region(grid: StateGrid, target: Target, seabed: float) -> np.ndarray:
+    """Mask of the grid voxels around the object: within `FOCUS_MARGIN_M` of its footprint's circle, from above
+    its top down to just under the seabed."""
+    ijk = np.indices(grid.shape).reshape(3, -1).T
+    c = grid.centres(ijk)
+    near = np.hypot(c[:, 0] - target.north, c[:, 1] - target.east) <= target.radius + FOCUS_MARGIN_M
+    level = (c[:, 2] >= target.top_depth - FOCUS_MARGIN_M) & (c[:, 2] <= seabed + 0.25)
+    return np.asarray((near & level).reshape(grid.shape))
 
 
 def scan_of(frame: ScanFrame) -> Scan:
@@ -122,6 +155,8 @@ class TargetRun:
     replans: int = 0
     stop_reason: str = ""
     estimate: float = 0.0
+    focus_done_at: float | None = None
+    """When the object's region had nothing left to reveal (then the whole box is explored)."""
 
     def object_voxels(self) -> np.ndarray:
         """Flat grid ids of the occupied voxels that belong to the object (above the seabed, over its footprint)."""
@@ -132,13 +167,21 @@ class TargetRun:
         near = np.hypot(c[:, 0] - t.north, c[:, 1] - t.east) <= t.radius + 1.5
         return np.asarray(ids[near & (c[:, 2] < self.seabed - 0.4)])
 
+    def expected_voxels(self) -> float:
+        """Surface voxels the detection's box would have: its top and four sides."""
+        t, res = self.target, self.planner.grid.resolution
+        height = max(self.seabed - t.top_depth, 0.0)
+        return (t.length * t.width + 2.0 * (t.length + t.width) * height) / res**2
+
     def coverage_estimate(self) -> float:
-        """Share of the object's mapped voxels that are off the open contour (seen with their surroundings)."""
+        """The map's own estimate of the object's observed surface: the share of its mapped voxels off the open
+        contour (seen with their surroundings), times how many are mapped against what its detected box would
+        have (so that a few voxels seen early do not pass for a finished model)."""
         ids = self.object_voxels()
         if not len(ids):
             return 0.0
         open_edge = self.planner.derived.contour.reshape(-1)[ids]
-        return float(1.0 - open_edge.mean())
+        return float((1.0 - open_edge.mean()) * min(1.0, len(ids) / max(self.expected_voxels(), 1.0)))
 
 
 class ExploreAgent(Agent):
@@ -200,10 +243,12 @@ class ExploreAgent(Agent):
         self.cruise_depth = min(nav.depth, target.top_depth - self.safe - 1.0)
         lo, hi = exploration_box(target, self.safe, self.model.max_range, ceiling=self.cruise_depth - 1.0)
         products = survey_map_for(self.context.knowledge, target)
-        vm = prior_map(products, lo, hi, RESOLUTION_M)
+        vm = prior_map(products, lo, hi, RESOLUTION_M, uncertain=PRIOR_UNCERTAIN_M)
         seabed = seabed_depth(products, target, target.radius + 1.0)
         planner = FixedMountNbv(vm, lo, hi, self.model, weights=self.weights, safe_distance=self.safe,
                                 seed=self.context.mission.seed + self.index)
+        planner.focus = object_region(planner.grid, target, seabed)
+        planner.min_unknown = MIN_UNKNOWN  # the object's region alone holds few unknown voxels a view can reach
         start = self._start_view(planner, target, seabed, nav)
         if start is None:
             self.context.emit("explore_no_start", nav.time, element=self.context.element.id, object=target.id)
@@ -241,6 +286,8 @@ class ExploreAgent(Agent):
     # -- the loop ----------------------------------------------------------------------------------------------
     def step(self, observation: Observation) -> Command:
         nav = observation.nav
+        if self.status is not Status.RUNNING:
+            return Command.hold(nav)
         self.track.append((nav.time, nav.north, nav.east, nav.depth))
         if self.photo is not None:
             command = self.photo.step(observation)
@@ -270,13 +317,14 @@ class ExploreAgent(Agent):
     def _integrate(self, frame: ScanFrame) -> None:
         if self.tilt is None:
             self.tilt = mount_tilt_deg(frame)
-            for run in self.runs:
-                run.planner.pitch_deg = -self.tilt
+            for other in self.runs:
+                other.planner.pitch_deg = -self.tilt
         run = self.run
         if run is None or self.phase == "leave":
             return
         # Frames from (nearly) the pose of the last one add little to the planner's map but cost as much: they
-        # are skipped, except the first frame at a view. (Every frame is still recorded as scan data.)
+        # are skipped, except the first frame at a view. The metric `surface_observed_percent` counts every
+        # frame the sensor took (the simulator logs their true hits), fused or not.
         pose = (frame.north, frame.east, frame.depth, frame.heading)
         wanted = self.phase == "settle" and self.aligned_at is not None and self.last_scan <= self.aligned_at
         if self.last_pose is not None and not wanted:
@@ -356,6 +404,12 @@ class ExploreAgent(Agent):
         t0 = time.perf_counter()
         pose = View.at(here, nav.heading, -(self.tilt or 25.0))
         view = run.planner.propose(pose)
+        if view is None and run.planner.focus is not None:
+            # Nothing of the object's region is left unknown to a reachable view; spend what the budget leaves on
+            # the whole box (views around the object from new sides add hits on its surface).
+            run.planner.focus, run.planner.min_unknown = None, NbvPlanner.min_unknown
+            run.focus_done_at = nav.time
+            return self._hold()
         if view is None:
             self._next_target(nav, "nothing left to reveal")
             return self._hold() if self.phase not in ("approach",) else self._approach(nav, here)
@@ -392,8 +446,11 @@ class ExploreAgent(Agent):
         if self.photo is not None:
             self.photo.finish(self.details)
             return
-        occupied, views, volume, boxes = [], [], [], []
-        objects = []
+        occupied: list[np.ndarray] = []
+        views: list[tuple[float, ...]] = []
+        volume: list[tuple[float, ...]] = []
+        boxes: list[list[float]] = []
+        objects: list[dict[str, object]] = []
         for k, run in enumerate(self.runs):
             grid = run.planner.grid
             ids = grid.occupied_ids
@@ -408,6 +465,7 @@ class ExploreAgent(Agent):
                 "id": run.target.id, "source": run.target.source, "north": round(run.target.north, 2),
                 "east": round(run.target.east, 2), "views": len(run.views),
                 "stop_reason": run.stop_reason or "element ended",
+                "object_region_done_s": None if run.focus_done_at is None else round(run.focus_done_at - self.t0, 1),
                 "coverage_estimate_percent": round(100.0 * run.estimate, 1),
                 "rejected_views": run.rejected, "replans": run.replans,
                 "iteration_time_ms": {"mean": round(float(np.mean(it)), 1) if it else None,
@@ -424,10 +482,10 @@ class ExploreAgent(Agent):
             "scanner_tilt_deg": round(self.tilt, 2) if self.tilt is not None else None})
         self.context.knowledge.maps[self.context.element.id] = {
             "explore_occupied": np.concatenate(occupied).astype(np.float32) if occupied else np.zeros((0, 4)),
-            "explore_views": np.asarray(views, dtype=float).reshape(-1, 6),
-            "explore_volume": np.asarray(volume, dtype=float).reshape(-1, 4),
-            "explore_track": np.asarray(self.track, dtype=float).reshape(-1, 4),
-            "explore_boxes": np.asarray(boxes, dtype=float).reshape(-1, 6),
+            "explore_views": np.asarray(views, dtype=np.float64).reshape(-1, 6),
+            "explore_volume": np.asarray(volume, dtype=np.float64).reshape(-1, 4),
+            "explore_track": np.asarray(self.track, dtype=np.float64).reshape(-1, 4),
+            "explore_boxes": np.asarray(boxes, dtype=np.float64).reshape(-1, 6),
             "explore_resolution": np.array(RESOLUTION_M)}
 
 

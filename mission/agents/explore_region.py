@@ -94,15 +94,20 @@ def survey_map_for(knowledge: Knowledge, target: Target) -> dict[str, Any] | Non
     return None
 
 
-def prior_map(products: dict[str, Any] | None, lo: Array, hi: Array, resolution: float) -> VoxelMap:
+def prior_map(products: dict[str, Any] | None, lo: Array, hi: Array, resolution: float,
+              uncertain: float = 0.0) -> VoxelMap:
     """A voxel map over [lo, hi]: for every voxel column with a sounding, free from the box's top down to the
     sounding and occupied there — one miss and one hit, exactly what a vertical beam inserted with
     `VoxelMap.insert_scan` gives (unknown where the survey has no sounding, or without a survey). Written in one
-    vectorised update instead of one beam per column."""
+    vectorised update instead of one beam per column.
+
+    With `uncertain` > 0 the last `uncertain` metres above each sounding stay unknown and nothing is marked
+    occupied: a sounding is the mean of a grid cell (§2.1), so near an object's edges it says little about where
+    the surface is; the scanner has to find it."""
     vm = VoxelMap(resolution)
     if products is None:
         return vm
-    depth = np.asarray(products["depth"], dtype=float)
+    depth = fill_holes(np.asarray(products["depth"], dtype=float))
     cell, n0, e0 = float(products["cell"]), float(products["north0"]), float(products["east0"])
     k_lo = np.floor(np.asarray(lo, dtype=float) / resolution).astype(np.int64)
     k_hi = np.ceil(np.asarray(hi, dtype=float) / resolution).astype(np.int64)
@@ -119,17 +124,36 @@ def prior_map(products: dict[str, Any] | None, lo: Array, hi: Array, resolution:
     end_k = np.floor(sounding[ci, cj] / resolution).astype(np.int64)  # the voxel each sounding lies in
     kz = np.arange(k_lo[2], int(end_k.max()) + 1)
     free = kz[None, :] < end_k[:, None]
+    if uncertain > 0.0:
+        free = kz[None, :] < np.floor((sounding[ci, cj] - uncertain) / resolution)[:, None]
     col, lev = np.nonzero(free)
     keys_free = np.stack([ki[ci[col]], kj[cj[col]], kz[lev]], axis=1)
     keys_hit = np.stack([ki[ci], kj[cj], end_k], axis=1)
     store, codec = vm.store, vm.codec
     store.cover(np.minimum(keys_free.min(axis=0), keys_hit.min(axis=0)),
                 np.maximum(keys_free.max(axis=0), keys_hit.max(axis=0)))
-    for keys, table in ((keys_free, codec.after_miss), (keys_hit, codec.after_hit)):
+    updates = [(keys_free, codec.after_miss)] + ([(keys_hit, codec.after_hit)] if uncertain <= 0.0 else [])
+    for keys, table in updates:
         rel = (keys - store.origin_key).astype(np.int32).T.copy()
         at = store.positions((rel[0], rel[1], rel[2]), allocate=True)
         store.pool[at] = table.take(store.pool.take(at))
     return vm
+
+
+def fill_holes(depth: Array, passes: int = 2) -> Array:
+    """Cells without a sounding (holes between the beams at the swath's edge) take the shallowest sounding among
+    their 8 neighbours: the surface can be that high there, so the free space carved above it stays free. A hole
+    left would be an unknown pillar from the surface down, which the safety grid rightly treats as an obstacle."""
+    from scipy import ndimage
+
+    out = depth.copy()
+    for _ in range(passes):
+        hole = ~np.isfinite(out)
+        if not hole.any():
+            break
+        shallowest = ndimage.minimum_filter(np.where(hole, np.inf, out), size=3, mode="nearest")
+        out[hole] = np.where(np.isfinite(shallowest[hole]), shallowest[hole], np.nan)
+    return out
 
 
 def seabed_depth(products: dict[str, Any] | None, target: Target, radius: float) -> float:

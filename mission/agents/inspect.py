@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Hashable
 from typing import Any
 
 import numpy as np
@@ -30,9 +31,10 @@ from mission.frames import camera_pose, invert, pose_matrix, transform_points
 from mission.language.models import Inspect, KnownObject
 from mission.plugin_api import OdometryRequest, OdometryResult, PointSetModel, ReferencingRequest
 from mission.vehicle import Command, NavState, Observation
+from planners.ordering import Stop
 
-SEARCH_ALTITUDE_M = 5.0  # above a set's top while searching: a wide view, the skid still within stereo range
 FINE_ALTITUDE_M = 3.6  # above a set's top for the precise referencing (seed 000's experiments)
+SEARCH_ALTITUDE_M = 5.0  # searching: a wider view that still leaves the skid within stereo range
 SEARCH_STEP_M = 1.5  # expanding-square leg unit: well inside the footprint at the search altitude
 SEARCH_POSITIONS = 13
 SETTLE_S = 2.0
@@ -113,28 +115,32 @@ class InspectAgent(Agent):
         self.targets = {t.id: t for t in self.obj.targets if t.id in wanted}
         self.T_wo = database_pose(self.obj)  # T_world_object in the navigation frame: database, then fixes
         self.T_wo_trusted = self.T_wo.copy()  # the database pose or the last fused fix
+        self.search_started: float | None = None
+        self.search_goals: list[Goal] = []
+        self.search_index = 0
         self.fixed = False
         self.speed = min(context.mission.vehicle.cruise_speed, HOVER_SPEED_M_S)
         start = transform_points(invert(self.T_wo), np.array([[context.nav.north, context.nav.east,
                                                                context.nav.depth]]))[0]
-        set_pos = {s: pts.mean(axis=0) for s, pts in self.sets.items()}
-        spec = {tid: (np.asarray(t.at, dtype=float), self._candidates(t.reference, t.at)) for tid, t in
-                self.targets.items()}
-        binding = {tid: t.reference for tid, t in self.targets.items()}
+        set_pos: dict[Hashable, Any] = {s: pts.mean(axis=0) for s, pts in self.sets.items()}
+        spec: dict[Hashable, Any] = {tid: (np.asarray(t.at, dtype=float), self._candidates(t.reference, t.at))
+                                     for tid, t in self.targets.items()}
+        binding: dict[Hashable, Hashable] = {tid: t.reference for tid, t in self.targets.items()}
         self.plan = inspection_order(start, set_pos, spec, seed=context.mission.seed, binding=binding,
                                      set_cost=SET_COST_M)
         if p.order == "as-listed":
             self.queue = self._as_listed(binding)
         else:
             self.queue = list(self.plan.order)
-        self.done: list[tuple[str, Any]] = []
+        self.done: list[Stop] = []
         self.attempts: list[dict[str, Any]] = []
         self.photos: list[dict[str, Any]] = []
         self.replans: list[dict[str, Any]] = []
         self.vo_track: list[list[float]] = []
         self.vo_stats = {"frames": 0, "lost": 0, "chains": 0, "rereferences": 0}
         self.details = {
-            "object": self.obj.id, "order": [list(s) for s in self.queue], "plan_length_m": round(self.plan.length_m, 2),
+            "object": self.obj.id, "order": [list(s) for s in self.queue],
+            "plan_length_m": round(self.plan.length_m, 2),
             "exact_order": self.plan.exact, "attempts": self.attempts, "photos": self.photos,
             "replans": self.replans, "vo": {"track": self.vo_track, **self.vo_stats},
             "targets": {tid: {"photos_requested": t.photos, "photos": 0, "viewpoint_object": None,
@@ -162,8 +168,8 @@ class InspectAgent(Agent):
                         key=lambda s: float(np.linalg.norm(self.sets[s].mean(axis=0) - np.asarray(at))))
         return [reference, *others]
 
-    def _as_listed(self, binding: dict[str, str]) -> list[tuple[str, Any]]:
-        order: list[tuple[str, Any]] = []
+    def _as_listed(self, binding: dict[Hashable, Hashable]) -> list[Stop]:
+        order: list[Stop] = []
         for tid in self.targets:
             if ("set", binding[tid]) not in order:
                 order.append(("set", binding[tid]))
@@ -173,8 +179,9 @@ class InspectAgent(Agent):
     def planned_path(self) -> list[tuple[float, float]]:
         T = self.T_wo
         path = []
-        for kind, ident in self.queue:
-            p = self.sets[ident].mean(axis=0) if kind == "set" else np.asarray(self.targets[ident].at, dtype=float)
+        for kind, raw in self.queue:
+            ident = str(raw)
+            p = self.sets[ident].mean(axis=0) if kind == "set" else np.array(self.targets[ident].at, dtype=np.float64)
             w = transform_points(T, p[None, :])[0]
             path.append((float(w[0]), float(w[1])))
         return path
@@ -191,8 +198,8 @@ class InspectAgent(Agent):
         return Goal(float(body[0]), float(body[1]), float(body[2]), heading)
 
     def _over_set(self, set_id: str, altitude: float, shift: tuple[float, float] = (0.0, 0.0)) -> Goal:
-        """Hover over a set's centroid (as currently placed) at `altitude` above its top, image x along the
-        object's x-axis."""
+        """Hover over a set's centroid (as currently placed) at `altitude` above its top, the image's long side
+        (camera x) along the object's x-axis (seed 002 §3.3: the vehicle aligned with the object)."""
         pts = transform_points(self.T_wo, self.sets[set_id])
         centre = pts.mean(axis=0)
         camera = np.array([centre[0] + shift[0], centre[1] + shift[1], float(pts[:, 2].min()) - altitude])
@@ -224,7 +231,8 @@ class InspectAgent(Agent):
     def _next(self, nav: NavState) -> None:
         """Start the next stop, inserting a re-referencing before a target when odometry is not to be trusted."""
         while self.queue:
-            kind, ident = self.queue[0]
+            kind, raw = self.queue[0]
+            ident = str(raw)
             if kind == "target" and self.fixed and self._needs_rereference():
                 reference = self._nearest_usable_set(np.asarray(self.targets[ident].at, dtype=float))
                 if reference is not None:
@@ -266,8 +274,8 @@ class InspectAgent(Agent):
         here = self._camera_in_object(nav)[:3, 3]
         pending_targets = {("target", t) for t, d in self.details["targets"].items()
                            if d["photos"] < d["photos_requested"]}
-        done = [s for s in self.done if s[0] == "set"] + [("target", t) for t in self.targets
-                                                          if ("target", t) not in pending_targets]
+        done: list[Stop] = [s for s in self.done if s[0] == "set"]
+        done += [("target", t) for t in self.targets if ("target", t) not in pending_targets]
         self.plan = replan(self.plan, done, failed, here, seed=self.context.mission.seed)
         self.queue = list(self.plan.order)
         record = {"time": nav.time, "failed_set": failed, "order": [list(s) for s in self.queue],
@@ -281,24 +289,30 @@ class InspectAgent(Agent):
     # -- point sets: search and referencing ----------------------------------------------------------------------
     def _begin_set(self, set_id: str, nav: NavState) -> None:
         self.set_id = set_id
-        self.set_started = nav.time
         self.views: list[View] = []
         self.fine_tries = 0
         if self.fixed:  # a good estimate already: straight to the precise referencing
-            self.stage = "fine"
-            self.goals = [self._over_set(set_id, FINE_ALTITUDE_M)]
-        else:
-            self.stage = "search"
+            self._begin_fine(set_id)
+            return
+        # Until the object is first referenced, the vehicle searches for any of its sets: over each set as the
+        # database places it (this one first), then the search pattern around it; one budget for the search.
+        self.stage = "search"
+        if self.search_started is None:
+            self.search_started = nav.time
             offsets = expanding_square(SEARCH_STEP_M, SEARCH_POSITIONS) \
                 if self.params.search.pattern == "expanding-square" else meander_offsets(SEARCH_STEP_M,
                                                                                           SEARCH_POSITIONS)
-            # Over every set still usable first (any of them may be recognised), then the pattern around this one.
-            others = [s for s in self.sets if s != set_id and s not in self.plan.failed]
-            self.goals = [self._over_set(set_id, SEARCH_ALTITUDE_M)] + \
-                [self._over_set(s, SEARCH_ALTITUDE_M) for s in others] + \
+            others = [s for s in self.sets if s != set_id]
+            self.search_goals = [self._over_set(s, SEARCH_ALTITUDE_M) for s in (set_id, *others)] + \
                 [self._over_set(set_id, SEARCH_ALTITUDE_M, o) for o in offsets[1:]]
-        self.goal_index = 0
+            self.search_index = 0
+        self.goals, self.goal_index = self.search_goals, self.search_index
         self.phase = "go"
+
+    def _begin_fine(self, set_id: str) -> None:
+        self.set_id, self.stage = set_id, "fine"
+        self.views, self.fine_tries = [], 0
+        self.goals, self.goal_index, self.phase = [self._over_set(set_id, FINE_ALTITUDE_M)], 0, "go"
 
     def _set_failed(self, nav: NavState, reason: str) -> None:
         self.T_wo = self.T_wo_trusted.copy()  # what an unconfirmed search result suggested is dropped
@@ -312,7 +326,7 @@ class InspectAgent(Agent):
         assert self.context.plugins is not None
         T_world_cam = camera_pose(nav.north, nav.east, nav.depth, nav.heading, baseline=self.baseline)
         prior = invert(T_world_cam) @ self.T_wo
-        radius = FINE_PRIOR_RADIUS_M if self.stage == "fine" else SEARCH_PRIOR_RADIUS_M
+        radius = SEARCH_PRIOR_RADIUS_M if self.stage == "search" else FINE_PRIOR_RADIUS_M
         # Searching, any set that is in view will do (the more sets, the surer the identification); once the
         # object is placed, the set the plan visits.
         ids = [s for s in self.sets if s not in self.plan.failed] if self.stage == "search" else [self.set_id]
@@ -347,8 +361,8 @@ class InspectAgent(Agent):
                                   recognised=result.set_id)
                 self.queue.insert(0, ("set", self.set_id))
                 self.set_id = str(result.set_id)
-            self.stage, self.goals, self.goal_index, self.phase = "fine", [self._over_set(
-                self.set_id, FINE_ALTITUDE_M)], 0, "go"
+            self.search_index = self.goal_index
+            self._begin_fine(self.set_id)
             return
         if result.model_points is not None and result.points_cam is not None:
             self.views.append((result.model_points, transform_points(T_world_cam, result.points_cam)))
@@ -360,7 +374,11 @@ class InspectAgent(Agent):
                                   "T_object_cam": invert(self.T_wo) @ T_world_cam})
         self._start_chain(frame, nav)
         if fused is None and len(self.views) >= 2 * FINE_VIEWS:
-            self._set_failed(nav, f"{len(self.views)} views of the set do not agree")
+            if self.fixed:
+                self._set_failed(nav, f"{len(self.views)} views of the set do not agree")
+            else:
+                self.T_wo = self.T_wo_trusted.copy()
+                self._resume_search(nav)
             return
         if fused is not None and len(self.views) >= FINE_VIEWS:
             self.fixed = True
@@ -381,15 +399,32 @@ class InspectAgent(Agent):
             self._odometry(frame, nav)  # the frame still carries the odometry chain
         if self.stage == "fine":
             self.fine_tries += 1
-            if self.fine_tries > 2 * FINE_VIEWS:
-                self._set_failed(nav, "not recognised from above the set")
-            else:
+            if self.fine_tries <= 2 * FINE_VIEWS:
                 self.phase = "go"
+            elif self.fixed:
+                self._set_failed(nav, "not recognised from above the set")
+            else:  # the search's hit was not confirmed: drop it and search on
+                self.T_wo = self.T_wo_trusted.copy()
+                self.context.emit("search_hit_dropped", nav.time, element=self.context.element.id, set=self.set_id)
+                self._resume_search(nav)
             return
         self.goal_index += 1
+        self.search_index = self.goal_index
         self.phase = "go"
         if self.goal_index >= len(self.goals):
-            self._set_failed(nav, f"search exhausted ({len(self.goals)} positions)")
+            self._search_failed(nav, f"no set of '{self.obj.id}' recognised at {len(self.goals)} search positions")
+
+    def _resume_search(self, nav: NavState) -> None:
+        self.stage, self.goals, self.views, self.fine_tries = "search", self.search_goals, [], 0
+        self.search_index += 1
+        self.goal_index, self.phase = self.search_index, "go"
+        if self.search_index >= len(self.search_goals):
+            self._search_failed(nav, f"no set of '{self.obj.id}' recognised at {len(self.goals)} search positions")
+
+    def _search_failed(self, nav: NavState, reason: str) -> None:
+        self.context.emit("object_not_found", nav.time, element=self.context.element.id, reason=reason)
+        self.task = None
+        self.fail(reason)
 
     # -- odometry ------------------------------------------------------------------------------------------------
     def _start_chain(self, frame: Any, nav: NavState) -> None:
@@ -482,8 +517,10 @@ class InspectAgent(Agent):
         return self._step_target(nav, frame)
 
     def _step_set(self, nav: NavState, frame: Any) -> Command:
-        if nav.time - self.set_started > self.params.search.budget:
-            self._set_failed(nav, f"search budget {self.params.search.budget:.0f} s spent")
+        if not self.fixed and self.search_started is not None and \
+                nav.time - self.search_started > self.params.search.budget:
+            self._search_failed(nav, f"no set of '{self.obj.id}' recognised within the search budget "
+                                     f"({self.params.search.budget:.0f} s)")
             return Command.hold(nav)
         goal = self.goals[self.goal_index]
         if self.phase == "capture" and frame is not None:

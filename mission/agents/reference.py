@@ -122,6 +122,9 @@ class ReferenceAgent(Agent):
             record["T_world_object_est"] = T_world_object.round(6).tolist()
         if result.details.get("reason"):
             record["reason"] = result.details["reason"]
+        for key in ("approach", "elements", "table"):  # what a multi-view plug-in reports (seed 000 Table 1)
+            if key in result.details:
+                record[key] = result.details[key]
         self.attempts.append(record)
         self.context.emit("referencing_attempt", obs.nav.time, element=self.context.element.id,
                           **{k: v for k, v in record.items() if not k.startswith("T_") and k != "time"})
@@ -178,7 +181,8 @@ class ReferenceAgent(Agent):
         world = np.vstack([w for _, w in views])
         T_world_object = rigid_transform(model, world)
         self.T_world_object_est = T_world_object
-        fused = {**{k: v for k, v in last.items() if not k.startswith("T_")}, "stage": "fused",
+        fused = {**{k: v for k, v in last.items() if not k.startswith("T_") and k not in ("elements", "table")},
+                 "stage": "fused",
                  "matched": len(model), "views": len(views),
                  "residual_m": float(np.sqrt(np.mean(np.sum(
                      (transform_points(T_world_object, model) - world) ** 2, axis=1)))),

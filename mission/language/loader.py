@@ -112,6 +112,50 @@ def validate_world_file(path: Path) -> tuple[World | None, list[Diagnostic]]:
     return (world if not diags else None), diags
 
 
+def _check_models(doc: Located, path: Path, environment: bool) -> tuple[dict[int, str], list[Diagnostic]]:
+    """Multi-view model files named by database objects (`objects[i].model`), resolved like `world`: the
+    absolute paths by object index, and a located problem for each file that is missing or not a model."""
+    objects = doc.data.get("objects")
+    if not isinstance(objects, list):
+        return {}, []
+    paths: dict[int, str] = {}
+    diags: list[Diagnostic] = []
+    for i, obj in enumerate(objects):
+        model = obj.get("model") if isinstance(obj, dict) else None
+        if not isinstance(model, str):
+            continue
+        model_path = resolve_world_path(path, model)
+        if not environment:
+            paths[i] = str(model_path)
+        elif not model_path.is_file():
+            diags.append(doc.diagnostic(("objects", i, "model"),
+                                        f"model file '{model}' not found (looked at {model_path})"))
+        else:
+            problem = model_file_problem(model_path)
+            if problem:
+                diags.append(doc.diagnostic(("objects", i, "model"), f"model file '{model}' is not usable: "
+                                                                     f"{problem}"))
+            paths[i] = str(model_path)
+    return paths, diags
+
+
+def model_file_problem(path: Path) -> str:
+    """Why a multi-view model file cannot be used ('' when it can): unreadable, not YAML, or not a model.
+    Only the file's header is checked here; its views are read when a plug-in loads it."""
+    import yaml
+
+    try:
+        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        return f"cannot read it ({type(exc).__name__})"
+    expected = "auv-multiview-model/1"
+    if not isinstance(doc, dict) or doc.get("format") != expected:
+        return f"not a multi-view model (expected `format: {expected}`)"
+    if not isinstance(doc.get("views"), list) or not doc["views"]:
+        return "the model has no views"
+    return ""
+
+
 def validate_mission_file(path: str | Path, environment: bool = True) -> tuple[Mission | None, list[Diagnostic]]:
     """Validate a mission file completely; (the mission if it is valid, every problem found).
 
@@ -144,6 +188,12 @@ def validate_mission_file(path: str | Path, environment: bool = True) -> tuple[M
     elif isinstance(world, str) and mission is not None:
         world_path = resolve_world_path(path, world)
         mission = mission.model_copy(update={"world": str(world_path) if world_path.is_file() else None})
+    model_paths, model_diags = _check_models(doc, path, environment)
+    diags += model_diags
+    if mission is not None and model_paths:
+        mission = mission.model_copy(update={"objects": [
+            o.model_copy(update={"model": model_paths[i]}) if i in model_paths else o
+            for i, o in enumerate(mission.objects)]})
     if mission is not None:
         mission._source = str(path)
     return (mission if not diags else None), sorted(set(diags), key=lambda d: (d.file, d.line, d.col, d.message))

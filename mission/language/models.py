@@ -162,6 +162,8 @@ class KnownObject(Strict):
     size: tuple[Positive, Positive, Positive]
     characteristic_points: list[PointSet] = []
     targets: list[Target] = []
+    model: str | None = Field(None, description="multi-view model file (`auv model build`), relative to the "
+                                                "mission file; the loader resolves it to an absolute path")
 
 
 class Point(Strict):

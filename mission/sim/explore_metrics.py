@@ -16,7 +16,8 @@ For each object the agent explored, matched to the true object it is (the neares
   vehicle);
 * the element's `path_length_m` is the true 3-D path length (the vehicle moves vertically between views).
 
-For photo surveys, `photo_coverage_percent` is computed by the agent from its footprints and kept as it is.
+For photo surveys, `photo_coverage_percent` is the agent's (footprints at the estimated poses over the estimated
+object area); `photo_coverage_true_percent` places the same photographs at the true poses over the true object.
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ def part_frame(obj: PlacedObject, part: Part) -> tuple[Array, Array]:
     """(R_world_part, centre in the world) of a part; a cylinder's local z is its axis."""
     T = obj.T_world_object
     R_object_part = rotation_zyx(part.heading) if isinstance(part, Box) else _AXIS[part.axis]
-    return T[:3, :3] @ R_object_part, T[:3, :3] @ np.asarray(part.at, dtype=float) + T[:3, 3]
+    return T[:3, :3] @ R_object_part, T[:3, :3] @ np.asarray(part.at, dtype=np.float64) + T[:3, 3]
 
 
 def _grid(a: float, b: float, spacing: float) -> Array:
@@ -56,7 +57,7 @@ def _grid(a: float, b: float, spacing: float) -> Array:
 def _local_surface(part: Part, spacing: float) -> Array:
     """Surface points of a part in its own frame (centred; a cylinder along z)."""
     if isinstance(part, Box):
-        half = 0.5 * np.asarray(part.size, dtype=float)
+        half = 0.5 * np.asarray(part.size, dtype=np.float64)
         out = []
         for axis in range(3):
             u, v = [a for a in range(3) if a != axis]
@@ -82,9 +83,9 @@ def _local_surface(part: Part, spacing: float) -> Array:
 def distance_to_part(points: Array, obj: PlacedObject, part: Part) -> Array:
     """Exact distance (m) from world points (N, 3) to a part (0 inside it)."""
     R, c = part_frame(obj, part)
-    q = (np.asarray(points, dtype=float).reshape(-1, 3) - c) @ R
+    q = (np.asarray(points, dtype=np.float64).reshape(-1, 3) - c) @ R
     if isinstance(part, Box):
-        gap = np.maximum(np.abs(q) - 0.5 * np.asarray(part.size, dtype=float), 0.0)
+        gap = np.maximum(np.abs(q) - 0.5 * np.asarray(part.size, dtype=np.float64), 0.0)
         return np.asarray(np.linalg.norm(gap, axis=1))
     radial = np.maximum(np.hypot(q[:, 0], q[:, 1]) - part.radius, 0.0)
     axial = np.maximum(np.abs(q[:, 2]) - 0.5 * part.height, 0.0)
@@ -143,10 +144,45 @@ def _true_object(entry: dict[str, Any], scene: Scene) -> PlacedObject | None:
     return best if math.hypot(c.y - entry["north"], c.x - entry["east"]) <= MATCH_RADIUS_M else None
 
 
+def _photo_truth(item: dict[str, Any], rows: Array, scene: Scene, safe_distance: float) -> None:
+    """`photo_coverage_true_percent`: the true object's footprint inside the union of the photographs'
+    footprints placed at the vehicle's TRUE poses (at the true depth of the object's top)."""
+    from shapely import union_all
+
+    from mission.agents.photo_survey import footprint_polygon
+
+    fov = item.get("camera_fov_deg")
+    if not fov or not len(rows):
+        return
+    for entry in item.get("objects", []):
+        obj = _true_object(entry, scene)
+        if obj is None:
+            continue
+        shapes = []
+        for t in np.asarray(item.get("photo_times", []), dtype=np.float64):
+            r = rows[int(np.argmin(np.abs(rows[:, 0] - t)))]
+            altitude = obj.top_depth - r[3]
+            shapes.append(footprint_polygon(r[1], r[2], r[4], 2 * altitude * math.tan(math.radians(fov[0] / 2)),
+                                            2 * altitude * math.tan(math.radians(fov[1] / 2))))
+        covered = union_all(shapes).intersection(obj.footprint).area / obj.footprint.area if shapes else 0.0
+        entry["true_object"] = obj.id
+        entry["photo_coverage_true_percent"] = round(100.0 * covered, 2)
+        d = float(distance_to_object(rows[:, 1:4], obj).min())
+        entry["min_distance_to_object_m"] = round(d, 3)
+    shares = [e["photo_coverage_true_percent"] for e in item.get("objects", []) if "photo_coverage_true_percent" in e]
+    if shares:
+        item["photo_coverage_true_percent"] = round(float(np.mean(shares)), 2)
+    distances = [e["min_distance_to_object_m"] for e in item.get("objects", []) if "min_distance_to_object_m" in e]
+    if distances:
+        item["min_distance_to_object_m"] = min(distances)
+        item["safe_distance_breached"] = bool(min(distances) < safe_distance)
+
+
 def explore_truth(item: dict[str, Any], rep: ElementReport, knowledge: Knowledge, vehicle: SimulatedVehicle,
                   scene: Scene, safe_distance: float) -> None:
     """Add the truth-based explore metrics to an element's metrics `item` (see the module docstring)."""
-    rows = np.array([r[:14] for r in vehicle.log.rows if rep.start_time < r[0] <= rep.end_time], dtype=float)
+    log = np.array([r[:14] for r in vehicle.log.rows], dtype=np.float64).reshape(-1, 14)
+    rows: Array = log[(log[:, 0] > rep.start_time) & (log[:, 0] <= rep.end_time)]
     track = rows[:, 1:4] if len(rows) else np.zeros((0, 3))
     if len(track) > 1:
         item["path_length_m"] = round(float(np.linalg.norm(np.diff(track, axis=0), axis=1).sum()), 2)
@@ -156,13 +192,14 @@ def explore_truth(item: dict[str, Any], rep: ElementReport, knowledge: Knowledge
         seabed = scene.seabed.depths_at(track[:, 0], track[:, 1])
         item["min_distance_to_seabed_m"] = round(float(np.min(seabed - track[:, 2])), 3)
     if item.get("planner") == "rrt-photo":
+        _photo_truth(item, rows, scene, safe_distance)
         return
     resolution = float(item.get("resolution_m", 0.25))
     hits = [p for t, _, p in vehicle.log.scans if rep.start_time <= t <= rep.end_time and len(p)]
     observed = np.unique(np.floor(np.concatenate(hits) / resolution).astype(np.int64), axis=0) if hits \
         else np.zeros((0, 3), dtype=np.int64)
     products = knowledge.maps.get(rep.id, {})
-    occupied = np.asarray(products.get("explore_occupied", np.zeros((0, 4))), dtype=float)
+    occupied = np.asarray(products.get("explore_occupied", np.zeros((0, 4))), dtype=np.float64)
     grown = np.zeros((0, 3), dtype=np.int64)
     if len(occupied):
         keys = np.floor(occupied[:, :3] / resolution).astype(np.int64)

@@ -14,6 +14,7 @@ from mission.executive import ExecutionReport, Executive
 from mission.language.loader import load_world
 from mission.language.models import Mission
 from mission.plugin_host import PluginHost
+from mission.plugin_settings import plugin_settings
 from mission.sim.metrics import run_metrics
 from mission.sim.vehicle import SimulatedVehicle
 from mission.vehicle import NavState
@@ -78,7 +79,7 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
 
     wall0 = time.perf_counter()
     try:
-        host = PluginHost(mission.plugins.model_dump(), {"sensors": mission.sensors.model_dump()}, emit) \
+        host = PluginHost(mission.plugins.model_dump(), plugin_settings(mission), emit) \
             if any(mission.plugins.model_dump().values()) else None
         from mission.artifacts import Artifacts
 
@@ -95,7 +96,9 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
     metrics = run_metrics(mission.name, seed, report, vehicle, scene, wall)
     if out_dir is not None:
         from mission.runfolder import write_run_results
+        from mission.sim.photos import write_photos
 
+        write_photos(out_dir, report.knowledge, vehicle)  # photo surveys' pairs: photos/, out of the maps
         write_run_results(out_dir, metrics, vehicle, report.knowledge)
         if plots:
             from mission.plots import plot_run

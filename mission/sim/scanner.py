@@ -105,8 +105,8 @@ class Scanner3D:
     """A frustum scanner at the vehicle origin, tilted down by `tilt_deg` (see the module docstring); `world` is
     one MuJoCo model, or a `LocalWorld` that follows the vehicle."""
 
-    def __init__(self, world: MjWorld | LocalWorld, fov_deg: tuple[float, float] = (60.0, 45.0), max_range: float = 12.0,
-                 rate_hz: float = 2.0, rays: tuple[int, int] = DEFAULT_RAYS, tilt_deg: float = DEFAULT_TILT_DEG,
+    def __init__(self, world: MjWorld | LocalWorld, fov_deg: tuple[float, float] = (60.0, 45.0),
+                 max_range: float = 12.0, rate_hz: float = 2.0, rays: tuple[int, int] = DEFAULT_RAYS, tilt_deg: float = DEFAULT_TILT_DEG,
                  range_sigma: float = 0.01, seed: int = 0) -> None:
         if not (max_range > 0.0 and math.isfinite(max_range)):
             raise ValueError(f"scanner max_range must be a positive number of metres, got {max_range}")
@@ -129,8 +129,8 @@ class Scanner3D:
     def from_settings(cls, scene: Scene, settings: ScannerSettings, seed: int = 0) -> Scanner3D:
         """A scanner in `scene` configured by a mission's `sensors.scanner` block (rays and tilt: the defaults
         here)."""
-        return cls(LocalWorld(scene, settings.max_range), (float(settings.fov_deg[0]), float(settings.fov_deg[1])), settings.max_range,
-                   settings.rate_hz, seed=seed)
+        fov = (float(settings.fov_deg[0]), float(settings.fov_deg[1]))
+        return cls(LocalWorld(scene, settings.max_range), fov, settings.max_range, settings.rate_hz, seed=seed)
 
     @property
     def period_s(self) -> float:

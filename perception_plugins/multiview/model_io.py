@@ -34,6 +34,9 @@ def _matrix(value: Any, shape: tuple[int, ...], where: str) -> np.ndarray:
 def write_model(model: ObjectModel, path: str | Path) -> Path:
     """Write the model; returns the YAML file's path."""
     p = Path(path)
+    names = [v.name for v in model.views]
+    if len(set(names)) != len(names):   # each view is a pair of files named after it
+        raise MultiviewError(f"{p}: the model's view names are not unique ({', '.join(names)})")
     folder = _views_dir(p)
     folder.mkdir(parents=True, exist_ok=True)
     views = []

@@ -1,15 +1,15 @@
 """The virtual reference network of seed 003 ("Учет самопересечений траектории", Fig. 4–5).
 
 Reference frames are fixed every `every` frames along the trajectory; each keeps what the seed lists: the stereo
-pair (as its ORB stereo features with their triangulated points, which is all the binding uses), its pose, its
-chain of local transforms, and the seabed area it saw (its keyframe's triangulated points, in its camera frame).
-At every new fragment start the odometer offers the position to the network. If the position's view overlaps a
-reference's by at least `overlap` (the share of the position's points, placed by the current pose estimate, that
-fall inside the reference's image in front of it) and the reference's chain is shorter, the position is bound to
-it: features are matched between the two pairs, T_ref_cur follows from PnP-RANSAC and the four-image refinement,
-and the position's chain is replaced by the reference's chain plus that one transform. A new reference made at a
-bound position therefore carries the shorter chain. References are made during the first `formation_frames`
-frames (all along when None), and after that only at bound positions.
+pair (as its stereo features — Harris corners with ORB descriptors — and their triangulated points, which is all
+the binding uses), its pose, its chain of local transforms, and the seabed area it saw (its keyframe's
+triangulated points, in its camera frame). At every new fragment start the odometer offers the position to the
+network. If the position's view overlaps a reference's by at least `overlap` (the share of the position's points,
+placed by the current pose estimate, that fall inside the reference's image in front of it) and the reference's
+chain is shorter, the position is bound to it: features are matched between the two pairs, T_ref_cur follows from
+PnP-RANSAC and the four-image refinement, and the position's chain is replaced by the reference's chain plus that
+one transform. A new reference made at a bound position therefore carries the shorter chain. References are made
+during the first `formation_frames` frames (all along when None), and after that only at bound positions.
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ class Reference:
     index: int
     chain: Chain
     cloud: Cloud
-    """ORB stereo features of its pair and their points in its camera frame."""
+    """Stereo features of its pair (Harris corners, ORB descriptors) and their points in its camera frame."""
     view_points: Array
     """The part of the seabed it saw: triangulated points in its camera frame."""
     K: Array

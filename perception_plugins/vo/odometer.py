@@ -53,10 +53,15 @@ class OdometerSettings:
     """Fewer inliers than this is a tracking loss."""
     refresh_features: int = 120
     """A KLT fragment ends early when fewer features survive."""
+    fragment_rotation_deg: float = 10.0
+    """A KLT fragment also ends early once the view has turned this much since its start (LK's windows do not
+    rotate: long tracks across a turn drift, and the check against the start image rejects good ones)."""
     features: int = 500
     crop: bool = True
     """Adaptive mode: generate features only where the next position is predicted to see too (third mechanism)."""
     threshold_px: float = 1.5
+    calibrate_offset: bool = True
+    """KLT: estimate the pair's disparity offset from the fragments' motion (self-calibration)."""
     fps: float | None = None
     """Frame rate for the adaptive step; from the frames' times when None."""
     altitude: float | None = None
@@ -100,7 +105,8 @@ class Odometer:
         self.settings = s = settings or OdometerSettings()
         if s.step < 1 or s.max_step < 1 or s.fragment_steps < 1:
             raise VoError("step, max_step and fragment_steps must be at least 1")
-        self.frontend: Frontend = (KltTracker(s.features, s.threshold_px) if s.frontend == "klt"
+        self.frontend: Frontend = (KltTracker(s.features, s.threshold_px, calibrate_offset=s.calibrate_offset)
+                                   if s.frontend == "klt"
                                    else ClassicMatcher(2 * s.features, s.threshold_px))
         self.network = ReferenceNetwork(s.network) if s.network is not None else None
         self.stats = OdometerStats()
@@ -190,8 +196,9 @@ class Odometer:
             self._target = max(1, min(self._target, s.step))
             return Estimate(index, T_origin_b, 0, lost=True)
         self._in_fragment += 1
+        turned = np.degrees(np.linalg.norm(to_rotvec(step.T_key_b[:3, :3])))
         end = (s.frontend == "classic" or s.adaptive or self._in_fragment >= s.fragment_steps
-               or step.count < s.refresh_features)
+               or step.count < s.refresh_features or turned >= s.fragment_rotation_deg)
         T_key_b = self.frontend.commit(frame, step, end)
         T_origin_b = key.T_origin @ T_key_b
         self._remember_motion(invert(last.T_origin) @ T_origin_b, dt)

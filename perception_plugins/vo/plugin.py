@@ -23,9 +23,10 @@ from perception_plugins.vo.errors import VoError
 from perception_plugins.vo.odometer import Odometer, OdometerSettings
 from perception_plugins.vo.trajectory import METHODS, settings_for
 
-_OPTION_KEYS = {"step", "fragment_steps", "overlap_percent", "max_step", "min_features", "min_track",
-                "refresh_features", "features", "crop", "threshold_px", "fps", "altitude", "reference_every",
-                "bind_overlap", "bind_min_inliers", "chain_margin", "formation_frames"}
+_OPTION_KEYS = {"step", "fragment_steps", "fragment_rotation_deg", "calibrate_offset", "overlap_percent",
+                "max_step", "min_features", "min_track", "refresh_features", "features", "crop", "threshold_px",
+                "fps", "altitude", "reference_every", "bind_overlap", "bind_min_inliers", "chain_margin",
+                "formation_frames"}
 
 
 class StereoOdometryPlugin:

@@ -60,14 +60,20 @@ def baseline_boustrophedon(
 
 def best_single_direction(scene: Scene, sweeps: SweepCache, angle_step_deg: float, tolerance: float,
                           start: Array | None = None) -> CoveragePlan:
+    sweep, runs = best_single_direction_runs(scene, sweeps, angle_step_deg, tolerance, start)
+    return assemble(scene, runs, sweep.heading_deg, sweep.spacing, 1, "single-direction")
+
+
+def best_single_direction_runs(scene: Scene, sweeps: SweepCache, angle_step_deg: float, tolerance: float,
+                               start: Array | None = None) -> tuple[Sweep, list[Run]]:
+    """The sweep and runs of `best_single_direction`, not yet joined by transits."""
     headings = heading_grid(angle_step_deg)
     lines, length, gaps = row_statistics(scene.region, headings, sweeps.spacing)
     score = sweep_score(lines, length, gaps, u_turn_length(sweeps.spacing, scene.radius))
     top = shortlist(headings, (score,), SHORTLIST)
     options = [(sweeps.get(float(h)), single_direction_runs(scene, sweeps.get(float(h)), tolerance, start))
                for h in top]
-    sweep, runs = min(options, key=lambda o: estimated_length(scene, o[1]))
-    return assemble(scene, runs, sweep.heading_deg, sweep.spacing, 1, "single-direction")
+    return min(options, key=lambda o: estimated_length(scene, o[1]))
 
 
 def single_direction_plan(scene: Scene, sweep: Sweep, tolerance: float, start: Array | None = None) -> CoveragePlan:

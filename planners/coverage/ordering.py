@@ -3,9 +3,9 @@ problem as the targets of §3.4, with each cell flyable in several ways).
 
 Each task (a cell's meander, a contour pass) has variants (start side, direction); exactly one variant of every
 task is flown. The order and variants minimise the transits between them, plus the approach from the start point
-and the way to the finish point. Few tasks: exact dynamic programming over subsets (Held–Karp). More: greedy
-nearest neighbour, then 2-opt (reversing a stretch of tasks reverses each task's direction) alternating with
-the best variants for the order found.
+and the way to the finish point. Few tasks and variants: exact dynamic programming over subsets (Held–Karp).
+More: greedy nearest neighbour, then 2-opt (reversing a stretch of tasks reverses each task's direction)
+alternating with the best variants for the order found.
 """
 
 from __future__ import annotations

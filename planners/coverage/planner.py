@@ -5,13 +5,13 @@ forbidden zones, and it starts and finishes near given points.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .baseline import best_single_direction, single_direction_plan
+from .baseline import best_single_direction_runs, single_direction_runs
 from .heading import (
     edge_headings,
     heading_grid,
@@ -23,13 +23,18 @@ from .heading import (
 )
 from .headlands import core_region, headland_tasks
 from .plan import CoveragePlan, assemble, estimated_length
+from .runs import Run
 from .scene import Scene
-from .sweep import SweepCache
-from .tasks import cell_tasks, covers, order_tasks, trimmed
+from .sweep import Sweep, SweepCache
+from .tasks import cell_tasks, order_tasks, trimmed, trimmed_rows, uncovered_area
 
 Array = NDArray[np.float64]
-SHORTLIST = 3
-FULL_PLANS = 2         # line directions ordered in full (the best also in the headland layout)
+# estimated length, sweep, runs in flying order, cells, method, whether its coverage must be checked
+Option = tuple[float, Sweep, list[Run], int, str, bool]
+SHORTLIST = 2
+FULL_PLANS = 2         # line directions ordered in full
+HEADLAND_PLANS = 1     # of which also planned in the headland layout (more gained nothing measurable)
+INSET = 0.9            # share of the swath's overlap reach by which the outermost lines stand in
 
 
 def meander(
@@ -48,27 +53,30 @@ def meander(
     """Boustrophedon coverage of `area` minus the `exclude` polygons ([north, east] metres).
 
     `spacing` is required (it has a default only so that it may follow `exclude` positionally). Lines are
-    `spacing` apart at most (the spacing is shrunk so that a whole number of lines fits), each long
-    enough that a swath of `spacing` covers its band; they stop short of the no-go zones by the turning radius
-    plus `clearance`, and no part of the path comes closer to a zone than half the clearance. Where no-go zones
-    (or bays of the boundary) split the lines, the free area is decomposed into boustrophedon cells, each flown
-    as its own meander, and the cells, their start corners and directions are ordered to minimise the transits
-    (exactly for up to 13 cells and contour passes, greedy + 2-opt + or-opt beyond); transits route round the
-    zones. Turns are Dubins paths
-    of radius `turn_radius`: U-turns when lines are at least 2R apart, Ω-turns otherwise. Passes along the zones'
-    boundaries are added where the lines leave more than `fill_tolerance` of the free area uncovered by a swath
-    of `swath` (default: the spacing). The path starts at the line end nearest `start` and prefers to finish
-    near `finish`.
+    `spacing` apart at most (the spacing is shrunk so that a whole number of lines fits), each long enough that a
+    swath of `spacing` covers its band (where `swath` is wider, the outermost lines stand in from the boundary by
+    most of the overlap, which may save a line); they stop short of the no-go zones by the turning radius plus
+    `clearance`, and no part of the path comes closer to a zone than half the clearance. Where no-go zones (or
+    bays of the boundary) split the lines, the free area is decomposed into boustrophedon cells, each flown as
+    its own meander, and the cells, their start corners and directions are ordered to minimise the transits
+    (exactly while the tasks and their variants are few, greedy + 2-opt + or-opt beyond); transits route round
+    the zones. Turns are Dubins paths of radius `turn_radius`: U-turns when lines are at least 2R apart, Ω-turns
+    otherwise. Passes along the zones' boundaries are added where the lines leave more than `fill_tolerance` of
+    the free area uncovered by a swath of `swath` (default: the spacing). The path starts at the line end
+    nearest `start` and prefers to finish near `finish`.
 
     Where a zone is met, the contour passes next to it cover half a swath beyond the standoff: the lines there are
-    cut back to what the passes leave uncovered (`trims`), so that nothing is swept twice. A second layout flies
-    a ring round every zone and lays the lines over the rest only (`headlands`); the shorter wins.
+    cut back to what the passes leave uncovered (`trims`), so that nothing is swept twice; where a boundary
+    slants across the lines, each band's tip that lies under the next line's swath is left to that line. A second
+    layout flies a ring round every zone and lays the lines over the rest only (`headlands`); the shorter wins.
 
     `heading="auto"` tries the directions of the boundary edges and a 2° grid, scores them in closed form by
-    number of lines (turns) and then length, and plans the best few up to their cells and contour passes; the two
-    shortest of those are cut back and ordered in full (the best also in the headland layout). The best
-    single-direction boustrophedon (`baseline_boustrophedon`) is planned too: the shortest cell plan is returned
-    if it is no longer than that, else the single-direction plan (`method` tells which).
+    number of lines (turns) and then length, and plans the best two and the single-direction sweep's heading up to
+    their cells and contour passes; the two shortest of those are cut back and ordered in full (the best also in
+    the headland layout). The best single-direction boustrophedon (`baseline_boustrophedon`) is planned too: the
+    shortest cell plan no longer than it is returned; if there is none, that sweep with its lines cut back the
+    same way ("single-direction-cut") if it is shorter, else the single-direction plan itself (`method` tells
+    which).
 
     >>> plan = meander([[0, 0], [0, 400], [100, 400], [100, 0]], spacing=25.0, turn_radius=5.0)
     >>> plan.heading_deg, len(plan.lines), plan.turns, plan.cells
@@ -83,38 +91,65 @@ def meander(
     s_xy = None if start is None else np.asarray(start, dtype=float).reshape(2)[::-1].copy()
     f_xy = None if finish is None else np.asarray(finish, dtype=float).reshape(2)[::-1].copy()
     if heading == "auto":
-        base = best_single_direction(scene, sweeps, 1.0, fill_tolerance, s_xy)
+        base_sweep, base_runs = best_single_direction_runs(scene, sweeps, 1.0, fill_tolerance, s_xy)
         cands = merge_headings(heading_grid(2.0), edge_headings(scene.area, spacing / 2.0),
                                edge_headings(scene.zones, spacing / 2.0))
         lines, length, gaps = row_statistics(scene.region, cands, spacing)
         score = sweep_score(lines, length, gaps, u_turn_length(spacing, scene.radius))
-        heads = merge_headings(shortlist(cands, (score, lines), SHORTLIST), [base.heading_deg])
+        heads = merge_headings(shortlist(cands, (score, lines), SHORTLIST), [base_sweep.heading_deg])
     else:
         h = float(heading) % 180.0
-        base = single_direction_plan(scene, sweeps.get(h), fill_tolerance, s_xy)
+        base_sweep = sweeps.get(h)
+        base_runs = single_direction_runs(scene, base_sweep, fill_tolerance, s_xy)
         heads = np.array([h])
+    base = assemble(scene, base_runs, base_sweep.heading_deg, base_sweep.spacing, 1, "single-direction")
     # every direction planned up to its tasks; the most promising trimmed and ordered in full, with lines up to the
     # zones and (the best) in the headland layout too
-    drafts = sorted((cell_tasks(scene, sweeps.get(float(h)), fill_tolerance) for h in heads
-                     if sweeps.get(float(h)).pieces), key=lambda t: t.rough_length())[:FULL_PLANS]
+    # our lines: the outermost ones may stand in from the edge by what the swath's overlap covers
+    inset = max(0.0, INSET * 0.5 * (scene.swath - spacing))
+    ours = SweepCache(scene.region, scene.forbidden, spacing, inset)
+    drafts = sorted((cell_tasks(scene, ours.get(float(h)), fill_tolerance) for h in heads
+                     if ours.get(float(h)).pieces), key=lambda t: t.rough_length())[:FULL_PLANS]
+    layouts = [(draft, False) for draft in drafts]
     rings = headland_tasks(scene)
     if rings and drafts:
-        core = SweepCache(core_region(scene, [variants[0] for variants in rings]), scene.forbidden, spacing)
-        inner = core.get(drafts[0].sweep.heading_deg)
-        if inner.pieces:
-            drafts.append(cell_tasks(scene, inner, fill_tolerance, rings))
-    options = []
-    for draft in drafts:
+        core = SweepCache(core_region(scene, [variants[0] for variants in rings]), scene.forbidden, spacing, inset)
+        for draft in drafts[:HEADLAND_PLANS]:
+            inner = core.get(draft.sweep.heading_deg)
+            if inner.pieces:
+                layouts.append((cell_tasks(scene, inner, fill_tolerance, rings), True))
+    options: list[Option] = []
+    for draft, headland in layouts:
         tasks = trimmed(scene, draft, fill_tolerance)
         runs = order_tasks(scene, tasks.all, s_xy, f_xy)
-        options.append((estimated_length(scene, runs), tasks.sweep, runs, len(tasks.cells), bool(draft.extra)))
-    options.sort(key=lambda o: o[0])
-    for estimate, sweep, runs, n_cells, has_extra in options:
-        if estimate > base.length_m * 1.02:
+        options.append((estimated_length(scene, runs), tasks.sweep, runs, len(tasks.cells), "boustrophedon-cells",
+                        headland))
+    # the contour passes fill the cells' lines to the tolerance and cut lines keep what they covered; plans built
+    # otherwise (round rings, cut single-direction rows) may leave no more uncovered than the tolerance or, if
+    # that leaves more, than the single-direction plan does
+    def allowed() -> float:
+        return max(fill_tolerance * scene.free.area, uncovered_area(scene, base_runs)) + 1e-6
+
+    plan = _shortest(scene, options, base, allowed)
+    for neighbours in (True, False):
+        if plan is not None:
+            break
+        # no cell plan beats the single-direction sweep: that sweep with its lines cut back
+        rows = trimmed_rows(scene, base_sweep, base_runs, fill_tolerance, s_xy, neighbours)
+        if rows is not None:
+            plan = _shortest(scene, [(estimated_length(scene, rows), base_sweep, rows, 1, "single-direction-cut",
+                                      True)], base, allowed)
+    return base if plan is None else plan
+
+
+def _shortest(scene: Scene, options: list[Option], base: CoveragePlan,
+              allowed: Callable[[], float]) -> CoveragePlan | None:
+    """The shortest option flown in full that is no longer than `base` (and, where it is to be checked, leaves at
+    most `allowed()` m² of the free area uncovered), trying them by estimated length."""
+    for estimate, sweep, runs, n_cells, method, check in sorted(options, key=lambda o: o[0]):
+        if estimate > base.length_m * 1.02 or (check and uncovered_area(scene, runs) > allowed()):
             continue
-        if has_extra and not covers(scene, runs, fill_tolerance):
-            continue
-        plan = assemble(scene, runs, sweep.heading_deg, sweep.spacing, n_cells, "boustrophedon-cells")
+        plan = assemble(scene, runs, sweep.heading_deg, sweep.spacing, n_cells, method)
         if plan.length_m <= base.length_m + 1e-6:
             return plan
-    return base
+    return None

@@ -43,6 +43,8 @@ class Sweep:
     rows: Array
     pieces: tuple[Piece, ...]                      # sorted by row, then u
     links: tuple[tuple[int, int], ...]             # (lower, upper) pieces whose band slices touch
+    inset: float = 0.0                             # how far the outermost bands reach beyond their spacing-wide
+                                                   # share (their lines' swaths cover it)
 
     def points(self, u: Array, v: Array) -> Array:
         """(x, y) of sweep-frame points."""
@@ -64,8 +66,13 @@ def _intervals(geom: BaseGeometry) -> list[tuple[float, float]]:
     return out
 
 
-def build_sweep(region: BaseGeometry, forbidden: BaseGeometry, heading_deg: float, spacing: float) -> Sweep:
+def build_sweep(region: BaseGeometry, forbidden: BaseGeometry, heading_deg: float, spacing: float,
+                inset: float = 0.0) -> Sweep:
     """Survey lines of `heading_deg` covering `region` (x, y), clipped by `forbidden`, at most `spacing` apart.
+
+    With `inset`, the bands are laid over the region less `inset` at either side across the lines, and the
+    outermost bands reach over that margin too: a swath wider than the spacing by 2·`inset` still covers it, and
+    fewer lines may fit.
 
     >>> from shapely.geometry import box
     >>> zone = box(150, 30, 250, 70)
@@ -81,13 +88,16 @@ def build_sweep(region: BaseGeometry, forbidden: BaseGeometry, heading_deg: floa
     if reg.is_empty:
         return Sweep(heading_deg, spacing, np.zeros(0), (), ())
     umin, vmin, umax, vmax = reg.bounds
-    height = vmax - vmin
+    inset = inset if vmax - vmin > 2.0 * inset + 1e-9 else 0.0
+    height = vmax - vmin - 2.0 * inset
     n = max(1, math.ceil(height / spacing - 1e-9))
     step = height / n if height > 0 else spacing
-    edges = vmin + step * np.arange(n + 1)
-    edges[-1] = vmax
+    edges = vmin + inset + step * np.arange(n + 1)
+    edges[-1] = vmax - inset
     rows = 0.5 * (edges[:-1] + edges[1:])
-    slices = shapely.intersection(reg, shapely.box(umin - 1.0, edges[:-1], umax + 1.0, edges[1:]))
+    lower, upper = edges[:-1].copy(), edges[1:].copy()
+    lower[0], upper[-1] = vmin, vmax
+    slices = shapely.intersection(reg, shapely.box(umin - 1.0, lower, umax + 1.0, upper))
     min_area = 1e-3 * step * step
     comps: list[list[BaseGeometry]] = []
     pieces: list[Piece] = []
@@ -147,20 +157,21 @@ def build_sweep(region: BaseGeometry, forbidden: BaseGeometry, heading_deg: floa
                         continue
                     if any((x, y) in touching for x in piece_comps[p] for y in piece_comps[q]):
                         links.append((p, q))
-    return Sweep(heading_deg, step, rows, tuple(pieces), tuple(links))
+    return Sweep(heading_deg, step, rows, tuple(pieces), tuple(links), inset)
 
 
 class SweepCache:
     """Sweeps of one scene at one spacing, built once per heading."""
 
-    def __init__(self, region: BaseGeometry, forbidden: BaseGeometry, spacing: float):
+    def __init__(self, region: BaseGeometry, forbidden: BaseGeometry, spacing: float, inset: float = 0.0):
         self.region = region
         self.forbidden = forbidden
         self.spacing = spacing
+        self.inset = inset
         self._built: dict[float, Sweep] = {}
 
     def get(self, heading_deg: float) -> Sweep:
         key = round(float(heading_deg) % 180.0, 9)
         if key not in self._built:
-            self._built[key] = build_sweep(self.region, self.forbidden, key, self.spacing)
+            self._built[key] = build_sweep(self.region, self.forbidden, key, self.spacing, self.inset)
         return self._built[key]

@@ -17,6 +17,7 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
+from .baseline import single_direction_runs
 from .cells import cell_variants, decompose
 from .contours import contour_runs
 from .frames import from_sweep, to_sweep
@@ -26,7 +27,7 @@ from .ordering import order_variants
 from .runs import Run
 from .scene import Scene
 from .sweep import Sweep
-from .trims import trim_to_need
+from .trims import trim_to_need, trim_to_neighbours
 
 Array = NDArray[np.float64]
 
@@ -78,42 +79,74 @@ def order_tasks(scene: Scene, tasks: Sequence[list[Run]], start: Array | None = 
     cost = scene.transit_costs(exits, np.array([r.exit_angle for r in runs]), entries,
                                np.array([r.entry_angle for r in runs]))
     cost[task_of[:, None] == task_of[None, :]] = np.inf
-    start_cost = np.zeros(len(runs)) if start is None else scene.router.lengths(start, entries)[0]
-    finish_cost = np.zeros(len(runs)) if finish is None else scene.router.lengths(exits, finish)[:, 0]
+    start_cost = np.zeros(len(runs)) if start is None else _reachable(
+        scene.router.lengths(start, entries)[0], np.linalg.norm(entries - start, axis=1))
+    finish_cost = np.zeros(len(runs)) if finish is None else _reachable(
+        scene.router.lengths(exits, finish)[:, 0], np.linalg.norm(exits - finish, axis=1))
     order = order_variants(task_of, reverse_of, cost, start_cost, finish_cost)
     return [runs[v] for v in order]
 
 
-def covers(scene: Scene, runs: Sequence[Run], tolerance: float) -> bool:
-    """Whether the passes of `runs` leave at most `tolerance` of the free area uncovered."""
-    lines = [seg for run in runs for seg in run.lines]
-    return bool(uncovered(lines, scene.free, scene.swath).area <= tolerance * scene.free.area * (1.0 + 1e-6))
+def _reachable(routed: Array, direct: Array) -> Array:
+    """Route lengths with a large finite cost where no route round the zones exists (a start or finish point shut
+    in by zones), so that the order stays well defined."""
+    return np.where(np.isfinite(routed), routed, 10.0 * direct + 1e6)
+
+
+def uncovered_area(scene: Scene, runs: Sequence[Run]) -> float:
+    """The free area the passes of `runs` leave uncovered (m²)."""
+    return float(uncovered([seg for run in runs for seg in run.lines], scene.free, scene.swath).area)
 
 
 def trimmed(scene: Scene, plan: Tasks, tolerance: float) -> Tasks:
-    """The cells re-planned with their lines cut back to what the other passes leave uncovered, if that keeps the
-    coverage (at most `tolerance` of the free area, or what the uncut lines left, uncovered); else `plan`."""
+    """The cells re-planned with their lines cut back to what the other passes leave uncovered and then to what
+    the neighbouring lines' swaths leave of their bands, if that keeps the coverage (at most `tolerance` of the
+    free area, or what the uncut lines left, uncovered); failing that, cut back to the other passes only; failing
+    that too, `plan`."""
     sweep, tasks = plan.sweep, plan.cells
     others = [seg for variants in plan.extra for seg in variants[0].lines]
-    if not others:
-        return plan
     try:
-        covered = swept(others, scene.swath)
-        need = scene.free.difference(covered)
-        cut = trim_to_need(sweep, need, covered)
+        covered = swept(others, scene.swath) if others else None
+        need = scene.free if covered is None else scene.free.difference(covered)
+        first = sweep if covered is None else trim_to_need(sweep, need, covered)
+        second = trim_to_neighbours(first, need, scene.swath)
     except shapely.errors.GEOSException:          # cutting is an optimisation: a topology failure keeps the lines
         return plan
-    if cut.pieces == sweep.pieces or not cut.pieces:
-        return plan
-    cut_tasks = cell_variants(Joiner(scene, cut), decompose(cut))
 
     def left(cells: list[list[Run]]) -> float:
         return float(need.difference(swept(common_lines(cells, sweep.heading_deg), scene.swath)).area)
 
-    missed = left(cut_tasks)
-    if missed > tolerance * scene.free.area + 1e-6 and missed > left(tasks) + 1e-6:
-        return plan
-    return Tasks(cut, cut_tasks, plan.extra)
+    allowed: float | None = None
+    for cut in (second, first):
+        if cut.pieces == sweep.pieces or not cut.pieces:
+            continue
+        cut_tasks = cell_variants(Joiner(scene, cut), decompose(cut))
+        missed = left(cut_tasks)
+        if missed > tolerance * scene.free.area + 1e-6:
+            allowed = left(tasks) if allowed is None else allowed
+            if missed > allowed + 1e-6:
+                continue
+        return Tasks(cut, cut_tasks, plan.extra)
+    return plan
+
+
+def trimmed_rows(scene: Scene, sweep: Sweep, runs: Sequence[Run], tolerance: float, start: Array | None = None,
+                 neighbours: bool = True) -> list[Run] | None:
+    """The single-direction sweep `runs` (rows in order, see `single_direction_runs`) with the lines cut back to
+    what its contour passes (and with `neighbours`, the neighbouring lines) leave uncovered: the runs in flying
+    order, contour passes inserted; None if no line can be cut."""
+    passes = [seg for run in runs if run.turns == 0 and len(run.path) > 2 for seg in run.lines]
+    try:
+        covered = swept(passes, scene.swath) if passes else None
+        need = scene.free if covered is None else scene.free.difference(covered)
+        cut = sweep if covered is None else trim_to_need(sweep, need, covered)
+        if neighbours:
+            cut = trim_to_neighbours(cut, need, scene.swath)
+    except shapely.errors.GEOSException:
+        return None
+    if cut.pieces == sweep.pieces or not cut.pieces:
+        return None
+    return single_direction_runs(scene, cut, tolerance, start)
 
 
 def common_lines(tasks: list[list[Run]], heading_deg: float) -> list[Array]:

@@ -11,10 +11,13 @@ from __future__ import annotations
 
 import numpy as np
 import shapely
+from numpy.typing import NDArray
 from shapely.geometry.base import BaseGeometry
 
 from .frames import from_sweep, to_sweep
 from .sweep import Piece, Sweep
+
+Array = NDArray[np.float64]
 
 
 def trim_to_need(sweep: Sweep, need: BaseGeometry, covered: BaseGeometry | None = None,
@@ -38,8 +41,9 @@ def trim_to_need(sweep: Sweep, need: BaseGeometry, covered: BaseGeometry | None 
     u0 = np.array([q.u0 for q in p])
     u1 = np.array([q.u1 for q in p])
     v = np.array([q.v for q in p])
-    corners = np.stack([np.stack([u0, v - half], 1), np.stack([u1, v - half], 1), np.stack([u1, v + half], 1),
-                        np.stack([u0, v + half], 1)], axis=1)                     # (P, 4, 2) in the sweep frame
+    v_lo, v_hi = v - half - _below(sweep), v + half + _above(sweep)
+    corners = np.stack([np.stack([u0, v_lo], 1), np.stack([u1, v_lo], 1), np.stack([u1, v_hi], 1),
+                        np.stack([u0, v_hi], 1)], axis=1)                           # (P, 4, 2) in the sweep frame
     bands = shapely.polygons(from_sweep(corners, sweep.heading_deg))
     todo = np.arange(len(p)) if covered is None else np.flatnonzero(shapely.intersects(bands, covered))
     shapely.prepare(need)
@@ -57,8 +61,91 @@ def trim_to_need(sweep: Sweep, need: BaseGeometry, covered: BaseGeometry | None 
             extent[int(k)] = (lo, hi)
         else:
             del extent[int(k)]
+    return _with_extents(sweep, extent)
+
+
+def trim_to_neighbours(sweep: Sweep, need: BaseGeometry, swath: float, sliver: float = 1e-3) -> Sweep:
+    """`sweep` with each line cut further to what its neighbours' swaths leave of its band's `need` (x, y).
+
+    A swath wider than the spacing reaches (swath − spacing)/2 into each neighbouring band. Where a boundary
+    slants across the lines, a band's far tip lies along one of its edges, under the swath of the next line,
+    which runs further: the line is cut back to the rest of its band. The neighbours are taken as they are in
+    `sweep`; each line keeps the middle of its band, so what it leaves to a neighbour the neighbour keeps.
+
+    >>> from shapely.geometry import Polygon
+    >>> from .sweep import build_sweep
+    >>> wedge = Polygon([(0, 0), (400, 0), (0, 100)])            # the hypotenuse slants across eastward lines
+    >>> sweep = build_sweep(wedge, Polygon(), 90.0, 50.0)        # row 1's tip lies under row 0's swath
+    >>> [round(p.u1) for p in sweep.pieces], [round(p.u1) for p in trim_to_neighbours(sweep, wedge, 62.5).pieces]
+    ([400, 200], [400, 176])
+    """
+    p = sweep.pieces
+    if not p or swath <= sweep.spacing:
+        return sweep
+    s = sweep.spacing
+    reach = 0.5 * (swath - s) * 0.95                       # a little under the neighbours' reach, for safety
+    half = (0.5 - 1e-6) * s
+    below, above = _below(sweep), _above(sweep)
+    by_row: dict[int, list[int]] = {}
+    for k, q in enumerate(p):
+        by_row.setdefault(q.row, []).append(k)
+    boxes: list[tuple[float, float, float, float]] = []
+    owner: list[int] = []
+    for k, q in enumerate(p):
+        boxes.append((q.u0, q.v - half + reach, q.u1, q.v + half - reach))             # the middle of the band
+        owner.append(k)
+        for side in (1, -1):                                # the strips along the band's upper and lower edges
+            if side > 0:
+                lo_v, hi_v = q.v + half - reach, q.v + half + float(above[k])
+            else:
+                lo_v, hi_v = q.v - half - float(below[k]), q.v - half + reach
+            cover = sorted((p[m].u0, p[m].u1) for m in by_row.get(q.row + side, []))
+            at = q.u0
+            for a, b in cover:
+                if b <= at or a >= q.u1:
+                    continue
+                if a > at:
+                    boxes.append((at, lo_v, a, hi_v))
+                    owner.append(k)
+                at = max(at, b)
+            if at < q.u1:
+                boxes.append((at, lo_v, q.u1, hi_v))
+                owner.append(k)
+    box = np.array(boxes)
+    corners = np.stack([box[:, [0, 1]], box[:, [2, 1]], box[:, [2, 3]], box[:, [0, 3]]], axis=1)
+    shapely.prepare(need)
+    parts = shapely.intersection(shapely.polygons(from_sweep(corners, sweep.heading_deg)), need)
+    min_area = sliver * s**2
+    coords: dict[int, list[Array]] = {}
+    for k, geom in zip(owner, parts, strict=True):
+        for g in shapely.get_parts(geom):
+            if g.area > min_area:
+                coords.setdefault(k, []).append(shapely.get_coordinates(g))
+    extent: dict[int, tuple[float, float]] = {}
+    for k, found in coords.items():
+        u = to_sweep(np.concatenate(found), sweep.heading_deg)[:, 0]
+        lo, hi = max(p[k].u0, float(u.min())), min(p[k].u1, float(u.max()))
+        if hi > lo:
+            extent[k] = (lo, hi)
+    return _with_extents(sweep, extent)
+
+
+def _below(sweep: Sweep) -> Array:
+    """How far each piece's band reaches below its spacing-wide share (the first row's reaches over the inset)."""
+    return np.array([sweep.inset if q.row == 0 else 0.0 for q in sweep.pieces])
+
+
+def _above(sweep: Sweep) -> Array:
+    """How far each piece's band reaches above its spacing-wide share (the last row's reaches over the inset)."""
+    last = len(sweep.rows) - 1
+    return np.array([sweep.inset if q.row == last else 0.0 for q in sweep.pieces])
+
+
+def _with_extents(sweep: Sweep, extent: dict[int, tuple[float, float]]) -> Sweep:
+    """`sweep` keeping the pieces in `extent`, with those extents, and the links between them."""
+    p = sweep.pieces
     keep = sorted(extent)
     new_id = {old: new for new, old in enumerate(keep)}
     links = tuple((new_id[a], new_id[b]) for a, b in sweep.links if a in new_id and b in new_id)
     pieces = tuple(Piece(p[k].row, p[k].v, *extent[k]) for k in keep)
-    return Sweep(sweep.heading_deg, sweep.spacing, sweep.rows, pieces, links)
+    return Sweep(sweep.heading_deg, sweep.spacing, sweep.rows, pieces, links, sweep.inset)

@@ -3,10 +3,10 @@ moves in the Lin–Kernighan manner (take an edge out, put a shorter one in from
 positive), chained up to `depth` 3-opt moves deep, over neighbour lists with don't-look bits, and the double-bridge
 kick of an iterated local search.
 
-The tour is an array with positions; every move is made of reversals (2-opt flips) of the shorter side, logged so
-that a chain that ends worse is undone by replaying the log backwards; a rejected kick is undone by restoring copies
-of the two arrays, which is cheaper than replaying the dozens of reversals its repair made. Pure Python on lists: a
-move reads a handful of numbers, where numpy's per-call overhead would dominate. Symmetric costs only.
+The tour is an array with positions; every move is made of reversals (2-opt flips) of the shorter side. A chain
+that ends worse, or a rejected kick, is undone by restoring copies of the two arrays taken before it (two list
+copies cost less than replaying the reversals backwards). Pure Python on lists: a move reads a handful of numbers,
+where numpy's per-call overhead would dominate. Symmetric costs only.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ class ClosedTour:
     longest chain of 3-opt moves tried from one stop."""
 
     def __init__(self, cost: list[list[float]], neighbours: Sequence[Sequence[int]], order: Sequence[int],
-                 breadth: tuple[int, int] = (6, 5), depth: int = 4) -> None:
+                 breadth: tuple[int, int] = (6, 5), depth: int = 6) -> None:
         self.cost = cost
         self.n = len(order)
         # each stop's candidates with their costs, nearest first: the inner loops read both
@@ -39,7 +39,6 @@ class ClosedTour:
         self.pos = [0] * self.n
         for i, v in enumerate(self.order):
             self.pos[v] = i
-        self.log: list[tuple[int, int]] = []
         self.queued = bytearray(self.n)
 
     def length(self) -> float:
@@ -47,8 +46,17 @@ class ClosedTour:
         return sum(c[t[i - 1]][t[i]] for i in range(self.n))
 
     # -- reversals -------------------------------------------------------------------------------------------
-    def _raw_reverse(self, i: int, j: int) -> None:
-        t, pos = self.order, self.pos
+    def flip(self, a: int, b: int, c: int, d: int) -> None:
+        """Replace edges {a, b} and {c, d} by {a, c} and {b, d}; the cycle reads a b … c d one way or the other.
+        Of the two paths whose reversal does it, the shorter is reversed."""
+        t, pos, n = self.order, self.pos, self.n
+        pa = pos[a] + 1
+        if t[pa if pa < n else 0] == b:
+            i, j = pos[b], pos[c]
+        else:
+            i, j = pos[c], pos[b]
+        if 2 * ((j - i) % n + 1) > n:
+            i, j = (j + 1) % n, (i - 1) % n
         if i <= j:
             seg = t[i:j + 1]
             seg.reverse()
@@ -56,36 +64,13 @@ class ClosedTour:
             for k, v in enumerate(seg, i):
                 pos[v] = k
             return
-        cut = self.n - i                        # the segment wraps: positions i…n−1, then 0…j
+        cut = n - i                             # the path wraps: positions i…n−1, then 0…j
         seg = t[i:] + t[:j + 1]
         seg.reverse()
         t[i:] = seg[:cut]
         t[:j + 1] = seg[cut:]
         for k, v in enumerate(seg):
             pos[v] = k + i if k < cut else k - cut
-
-    def flip(self, a: int, b: int, c: int, d: int) -> None:
-        """Replace edges {a, b} and {c, d} by {a, c} and {b, d}; the cycle reads a b … c d one way or the other.
-        Of the two paths whose reversal does it, the shorter is reversed (logged, for `undo`)."""
-        pos, n = self.pos, self.n
-        pa = pos[a] + 1
-        if self.order[pa if pa < n else 0] == b:
-            i, j = pos[b], pos[c]
-        else:
-            i, j = pos[c], pos[b]
-        if 2 * ((j - i) % n + 1) > n:
-            i, j = (j + 1) % n, (i - 1) % n
-        self.log.append((i, j))
-        self._raw_reverse(i, j)
-
-    def mark(self) -> int:
-        return len(self.log)
-
-    def undo(self, mark: int = 0) -> None:
-        log = self.log
-        while len(log) > mark:
-            i, j = log.pop()
-            self._raw_reverse(i, j)
 
     # -- moves -----------------------------------------------------------------------------------------------
     def search(self, t1: int, t2_only: int, gain: float, added: set[tuple[int, int]]) -> tuple[float, Move | None,
@@ -188,7 +173,7 @@ class ClosedTour:
             return gain, list(move[1:5] if move[0] == 0 else move[1:])
         if self.depth < 2 or open_move is None:
             return None
-        mark = self.mark()
+        saved_order, saved_pos = self.order[:], self.pos[:]
         added: set[tuple[int, int]] = set()
         touched: list[int] = []
         for _ in range(1, self.depth):
@@ -203,7 +188,8 @@ class ClosedTour:
                 self.apply(move)
                 touched.extend(move[1:5] if move[0] == 0 else move[1:])
                 return gain, touched
-        self.undo(mark)
+        self.order[:] = saved_order
+        self.pos[:] = saved_pos
         return None
 
     def apply(self, move: Move) -> None:
@@ -244,11 +230,10 @@ class ClosedTour:
 def iterated_local_search(tour: ClosedTour, rng: random.Random, kicks: int, max_segment: int,
                           deadline: float | None = None, fixed: tuple[int, int] | None = None) -> float:
     """Kick (double bridge with segments of 1…`max_segment` stops at a random place), re-optimise around the
-    kick, keep the result if it is no worse, else undo; `kicks` times or until `deadline` (perf_counter).
-    An edge `fixed` is never kicked out. Returns the total gain over the starting tour."""
+    kick, keep the result if it is no worse, else restore the tour before it; `kicks` times or until `deadline`
+    (perf_counter). An edge `fixed` is never kicked out. Returns the total gain over the starting tour."""
     n = tour.n
     total = tour.optimise(range(n))
-    tour.log.clear()
     if n < 8:
         return total
     span = max(1, min(max_segment, (n - 2) // 3))
@@ -268,8 +253,7 @@ def iterated_local_search(tour: ClosedTour, rng: random.Random, kicks: int, max_
         change = delta - tour.optimise(touched)
         if change <= EPS:
             total -= change
-        else:                                   # rejected: restoring copies beats replaying the reversals
+        else:
             tour.order[:] = saved_order
             tour.pos[:] = saved_pos
-        tour.log.clear()
     return total

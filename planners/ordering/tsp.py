@@ -26,7 +26,7 @@ from .precedence import PrecedencePath, violations
 
 Method = Literal["auto", "exact", "heuristic"]
 NEIGHBOURS = 10                   # candidate list length
-KICKS_PER_STOP = 0.7              # tours: kicks = effort · 0.7 · n (n = 200: within ~70–90 ms on one core)
+KICKS_PER_STOP = 0.7              # tours: kicks = effort · 0.7 · n (n = 200: ~80 ms on one unloaded core)
 BREADTH = (6, 5)                  # candidates tried for the first and second edge added by a 3-opt move
 DEPTH = 6                         # longest chain of 3-opt moves (Lin–Kernighan style) tried from one stop
 MAX_SEGMENT = 50                  # longest segment a double-bridge kick moves (tours)

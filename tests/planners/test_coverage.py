@@ -57,8 +57,11 @@ def test_spacing_is_taken_over_the_highest_ground():
 def test_rectangle_gets_one_line_per_spacing_and_is_covered():
     plan = meander(RECT, spacing=SPACING, heading=90.0, swath=SWATH)
     assert len(plan.lines) == 6 and plan.turns == 5 and plan.cells == 1
-    norths = sorted(float(line[0, 0]) for line in plan.lines)
-    assert norths == pytest.approx([25, 75, 125, 175, 225, 275])     # offset spacing/2 inside the boundary
+    norths = np.array(sorted(float(line[0, 0]) for line in plan.lines))
+    # evenly spread, at most a spacing apart; the outermost stand in from the boundary by less than half a swath
+    # (the swath's overlap lets them stand further in than half a spacing)
+    assert np.diff(norths) == pytest.approx(np.full(5, np.diff(norths).mean())) and np.diff(norths).max() <= SPACING
+    assert norths[0] == pytest.approx(300 - norths[-1]) and SPACING / 2 <= norths[0] < SWATH / 2
     assert all(abs(line[1, 1] - line[0, 1]) == pytest.approx(400.0) for line in plan.lines)
     assert coverage_fraction(plan, RECT, [], SWATH) >= 0.995
 

@@ -6,13 +6,14 @@ import shapely
 from shapely.geometry import LineString, Polygon, box
 
 from planners.coverage import baseline_boustrophedon, coverage_fraction, meander
+from planners.coverage.baseline import single_direction_runs
 from planners.coverage.headlands import core_region, headland_rings, headland_tasks
 from planners.coverage.metrics import swept
 from planners.coverage.ordering import order_variants, tour_cost
 from planners.coverage.scene import Scene
 from planners.coverage.sweep import build_sweep
-from planners.coverage.tasks import cell_tasks, common_lines, trimmed
-from planners.coverage.trims import trim_to_need
+from planners.coverage.tasks import cell_tasks, common_lines, trimmed, trimmed_rows
+from planners.coverage.trims import trim_to_need, trim_to_neighbours
 
 SPACING = 50.0
 SWATH = SPACING / 0.8                                       # 20 % overlap
@@ -40,6 +41,18 @@ def test_a_line_whose_band_another_pass_covers_is_cut_back_or_dropped():
     assert cut.links == ()                                                        # rows 0 and 2 never touched
 
 
+def test_a_band_tip_under_the_next_line_s_swath_is_left_to_that_line():
+    # sides slanting at cot = 2/3 across six eastward rows: each row but the outermost gives up the tip at either
+    # end that the row beyond covers, 0.95 of the overlap reach (swath - spacing)/2 = 6.25 m deep
+    shape = Polygon([(0, 0), (500, 0), (700, 300), (200, 300)])
+    sweep = build_sweep(shape, Polygon(), 90.0, SPACING)
+    cut = trim_to_neighbours(sweep, shape, SWATH)
+    saved = sum(p.length for p in sweep.pieces) - sum(p.length for p in cut.pieces)
+    assert abs(saved - 10 * 0.95 * 6.25 * 2 / 3) < 0.5
+    lines = [sweep.points(np.array([p.u0, p.u1]), np.array([p.v, p.v])) for p in cut.pieces]
+    assert shape.difference(swept(lines, SWATH)).area < 1e-6 * shape.area
+
+
 def test_lines_next_to_the_contour_passes_are_shortened_and_the_area_stays_covered():
     scene = Scene.build(WIDE, [BLOCK], 6.0, 2.0, SWATH)
     sweep = build_sweep(scene.region, scene.forbidden, 90.0, SPACING)
@@ -54,6 +67,23 @@ def test_lines_next_to_the_contour_passes_are_shortened_and_the_area_stays_cover
     assert line_length(full) - line_length(cut) > 12 * 0.3 * SWATH
     passes = common_lines(cut.cells, 90.0) + [s for variants in cut.extra for s in variants[0].lines]
     assert scene.free.difference(swept(passes, SWATH)).area <= 1e-3 * scene.free.area + 1e-6
+
+
+def test_the_single_direction_sweep_cut_back_next_to_its_contour_passes_is_shorter_and_as_well_covered():
+    scene = Scene.build(WIDE, [BLOCK], 6.0, 2.0, SWATH)
+    sweep = build_sweep(scene.region, scene.forbidden, 0.0, SPACING)              # north-south lines
+    rows = single_direction_runs(scene, sweep, 1e-3)
+    cut = trimmed_rows(scene, sweep, rows, 1e-3)
+    assert cut is not None
+
+    def passes(runs):
+        return [s for run in runs for s in run.lines]
+
+    def length(runs):
+        return sum(float(np.linalg.norm(s[1] - s[0])) for s in passes(runs))
+
+    assert length(cut) < length(rows) - 16 * 0.3 * SWATH      # the ends of the eight lines the block splits
+    assert scene.free.difference(swept(passes(cut), SWATH)).area <= 1e-3 * scene.free.area + 1e-6
 
 
 def test_headland_rings_keep_the_standoff_and_turn_no_tighter_than_the_radius():
@@ -105,3 +135,22 @@ def test_large_orderings_fall_back_to_the_heuristic_and_still_fly_every_task_onc
     nearest = [int(np.argmin(np.where(task_of == t, 0.0, np.inf))) for t in range(n_tasks)]
     assert tour_cost(order, cost, np.zeros(len(pts)), np.zeros(len(pts))) < tour_cost(
         nearest, cost, np.zeros(len(pts)), np.zeros(len(pts)))
+
+
+def test_a_start_point_shut_in_by_a_zone_still_gets_the_whole_survey():
+    rect = [[0, 0], [0, 400], [300, 400], [300, 0]]
+    hole = [[100, 150], [100, 250], [200, 250], [200, 150]]
+    for start, finish in (([150, 200], None), ([150, 200], [150, 200])):       # no route leaves the zone
+        plan = meander(rect, [hole], spacing=SPACING, turn_radius=6.0, swath=SWATH, start=start, finish=finish)
+        assert len(plan.lines) >= 6
+        assert coverage_fraction(plan, rect, [hole], SWATH) >= 0.995
+
+
+def test_the_outermost_lines_stand_in_by_the_swath_overlap_and_save_a_line():
+    # 310 m across at 50 m spacing needs ceil(310 / 50) = 7 lines at half a spacing from the edges; a 62.5 m swath
+    # reaches 6.25 m beyond its band, so lines standing 0.9 of that further in cover it with ceil(298.75 / 50) = 6
+    rect = [[0, 0], [0, 400], [310, 400], [310, 0]]
+    plan = meander(rect, spacing=SPACING, heading=90.0, swath=SWATH)
+    assert len(plan.lines) == 6
+    assert coverage_fraction(plan, rect, [], SWATH) >= 0.999
+    assert len(meander(rect, spacing=SPACING, heading=90.0, swath=SPACING).lines) == 7    # no overlap, no saving
