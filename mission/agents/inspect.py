@@ -54,6 +54,7 @@ PHOTO_INTERVAL_S = 1.0
 SET_COST_M = 8.0  # a set's search and referencing, in metres of travel, for the ordering
 HOVER_SPEED_M_S = 1.0
 CLEARANCE_MARGIN_M = 1.0  # above the minimum altitude when crossing the object
+ALTITUDE_MARGIN_M = 0.2  # kept above the mission's minimum altitude, by the altimeter, whatever the plan says
 OVER_GOAL_M = 0.6  # descend to a goal's depth only within this horizontal distance of it
 
 
@@ -216,12 +217,21 @@ class InspectAgent(Agent):
             depth_tolerance: float = 0.3) -> tuple[Command, bool]:
         """Hover to `goal` without sweeping low over the object: climb in place to the clearance depth, cross
         at it, and descend only over the goal."""
+        floor = self._altitude_floor(nav)
+        if floor < goal.depth:  # whatever lies under the vehicle is higher than the plan assumed: keep clear
+            goal = Goal(goal.north, goal.east, floor, goal.heading)
         if math.hypot(goal.north - nav.north, goal.east - nav.east) > OVER_GOAL_M:
             depth = min(goal.depth, self._clearance_depth())
             if nav.depth > depth + 0.3:
                 return Command(nav.heading, 0.0, depth=depth, station=(nav.north, nav.east)), False
             return hover_command(nav, Goal(goal.north, goal.east, depth, goal.heading), self.speed)[0], False
         return hover_command(nav, goal, self.speed, tolerance, depth_tolerance)
+
+    def _altitude_floor(self, nav: NavState) -> float:
+        """The deepest the vehicle may go here by its altimeter: the minimum altitude plus a margin."""
+        if nav.altitude is None:
+            return math.inf
+        return nav.depth + nav.altitude - self.context.mission.safety.min_altitude - ALTITUDE_MARGIN_M
 
     def _camera_in_object(self, nav: NavState) -> np.ndarray:
         T_world_cam = camera_pose(nav.north, nav.east, nav.depth, nav.heading, baseline=self.baseline)
@@ -297,8 +307,7 @@ class InspectAgent(Agent):
         # Until the object is first referenced, the vehicle searches for any of its sets: over each set as the
         # database places it (this one first), then the search pattern around it; one budget for the search.
         self.stage = "search"
-        if self.search_started is None:
-            self.search_started = nav.time
+        if not self.search_goals:
             offsets = expanding_square(SEARCH_STEP_M, SEARCH_POSITIONS) \
                 if self.params.search.pattern == "expanding-square" else meander_offsets(SEARCH_STEP_M,
                                                                                           SEARCH_POSITIONS)
@@ -531,7 +540,8 @@ class InspectAgent(Agent):
         command, there = self._go(nav, goal)
         if self.phase == "go" and there:
             self.phase, self.hold_since = "settle", nav.time
-            if self.stage == "search" and self.T_object_origin is None:
+            if self.stage == "search" and self.search_started is None:
+                self.search_started = nav.time  # the budget counts from the first search position
                 self.navigation = "dead-reckoning"  # near the object, relative navigation is steadier
         elif self.phase == "settle" and nav.time - self.hold_since >= SETTLE_S:
             self.phase = "capture"
