@@ -34,7 +34,9 @@ from mission.vehicle import Command, NavState, Observation
 from planners.ordering import Stop
 
 FINE_ALTITUDE_M = 3.6  # above a set's top for the precise referencing (seed 000's experiments)
-SEARCH_ALTITUDE_M = 5.0  # searching: a wider view that still leaves the skid within stereo range
+SEARCH_ALTITUDE_M = 5.0  # searching: a wider view, at most
+SEABED_RANGE_MARGIN_M = 0.7  # the seabed kept this far inside the stereo range while searching
+FOOTPRINT_MARGIN_M = 3.0  # the altimeter reads the seabed only this far clear of the charted footprint
 SEARCH_STEP_M = 1.5  # expanding-square leg unit: well inside the footprint at the search altitude
 SEARCH_POSITIONS = 13
 SETTLE_S = 2.0
@@ -117,6 +119,8 @@ class InspectAgent(Agent):
         self.T_wo = database_pose(self.obj)  # T_world_object in the navigation frame: database, then fixes
         self.T_wo_trusted = self.T_wo.copy()  # the database pose or the last fused fix
         self.search_started: float | None = None
+        self.seabed_depth: float | None = None  # from the altimeter while not over the object
+        self._sound_seabed(context.nav)
         self.search_goals: list[Goal] = []
         self.search_index = 0
         self.fixed = False
@@ -308,15 +312,40 @@ class InspectAgent(Agent):
         # database places it (this one first), then the search pattern around it; one budget for the search.
         self.stage = "search"
         if not self.search_goals:
-            offsets = expanding_square(SEARCH_STEP_M, SEARCH_POSITIONS) \
-                if self.params.search.pattern == "expanding-square" else meander_offsets(SEARCH_STEP_M,
-                                                                                          SEARCH_POSITIONS)
-            others = [s for s in self.sets if s != set_id]
-            self.search_goals = [self._over_set(s, SEARCH_ALTITUDE_M) for s in (set_id, *others)] + \
-                [self._over_set(set_id, SEARCH_ALTITUDE_M, o) for o in offsets[1:]]
-            self.search_index = 0
+            self.search_first = set_id
+            self._plan_search()
         self.goals, self.goal_index = self.search_goals, self.search_index
         self.phase = "go"
+
+    def _plan_search(self) -> None:
+        offsets = expanding_square(SEARCH_STEP_M, SEARCH_POSITIONS) \
+            if self.params.search.pattern == "expanding-square" else meander_offsets(SEARCH_STEP_M,
+                                                                                      SEARCH_POSITIONS)
+        first = self.search_first
+        others = [s for s in self.sets if s != first]
+        self.search_goals[:] = [self._over_set(s, self._search_altitude(s)) for s in (first, *others)] + \
+            [self._over_set(first, self._search_altitude(first), o) for o in offsets[1:]]
+
+    def _sound_seabed(self, nav: NavState) -> None:
+        """Keep the seabed depth the altimeter reads while the vehicle is clear of the object's charted
+        footprint (with a margin for the database's error)."""
+        if nav.altitude is None:
+            return
+        x, y, _ = transform_points(invert(database_pose(self.obj)), np.array([[nav.north, nav.east, nav.depth]]))[0]
+        length, width, _ = self.obj.size
+        m = FOOTPRINT_MARGIN_M
+        if not (-m <= x <= length + m and -m <= y <= width + m):
+            self.seabed_depth = nav.depth + nav.altitude
+
+    def _search_altitude(self, set_id: str) -> float:
+        """High for a wide view, but low enough that the seabed around the set stays within stereo range: its
+        texture gives the cloud most of its points (a plain deck alone gives too few)."""
+        stereo = self.context.mission.sensors.stereo
+        if stereo is None or self.seabed_depth is None:
+            return SEARCH_ALTITUDE_M
+        top = float(transform_points(self.T_wo, self.sets[set_id])[:, 2].min())
+        room = stereo.max_range - (self.seabed_depth - top) - SEABED_RANGE_MARGIN_M
+        return float(np.clip(room, FINE_ALTITUDE_M, SEARCH_ALTITUDE_M))
 
     def _begin_fine(self, set_id: str) -> None:
         self.set_id, self.stage = set_id, "fine"
@@ -518,6 +547,11 @@ class InspectAgent(Agent):
     # -- the loop ------------------------------------------------------------------------------------------------
     def step(self, observation: Observation) -> Command:
         nav = observation.nav
+        if self.search_started is None and self.search_goals:  # still approaching: the seabed may be read
+            known = self.seabed_depth
+            self._sound_seabed(nav)
+            if self.seabed_depth is not None and self.seabed_depth != known:
+                self._plan_search()
         frame = observation.stereo[-1] if observation.stereo else None
         if self.task is None:
             return Command.hold(nav)
