@@ -35,10 +35,10 @@ from planners.ordering import Stop
 
 FINE_ALTITUDE_M = 3.6  # above a set's top for the precise referencing (seed 000's experiments)
 SEARCH_ALTITUDE_M = 5.0  # searching: a wider view, at most
-SEABED_RANGE_MARGIN_M = 0.7  # the seabed kept this far inside the stereo range while searching
+SEABED_RANGE_MARGIN_M = 1.5  # the seabed kept this far inside the stereo range while searching
 FOOTPRINT_MARGIN_M = 3.0  # the altimeter reads the seabed only this far clear of the charted footprint
 SEARCH_STEP_M = 1.5  # expanding-square leg unit: well inside the footprint at the search altitude
-SEARCH_POSITIONS = 13
+SEARCH_POSITIONS = 9  # per set
 SETTLE_S = 2.0
 FINE_VIEWS = 3  # recognised views fused into one fix
 FINE_SHIFT_M = 0.15  # successive fine views move this far along the object's x-axis
@@ -322,9 +322,9 @@ class InspectAgent(Agent):
             if self.params.search.pattern == "expanding-square" else meander_offsets(SEARCH_STEP_M,
                                                                                       SEARCH_POSITIONS)
         first = self.search_first
-        others = [s for s in self.sets if s != first]
-        self.search_goals[:] = [self._over_set(s, self._search_altitude(s)) for s in (first, *others)] + \
-            [self._over_set(first, self._search_altitude(first), o) for o in offsets[1:]]
+        order = [first, *(s for s in self.sets if s != first)]
+        # Ring by ring of the pattern, over every set in turn (the planned one first): any set will do.
+        self.search_goals[:] = [self._over_set(s, self._search_altitude(s), o) for o in offsets for s in order]
 
     def _sound_seabed(self, nav: NavState) -> None:
         """Keep the seabed depth the altimeter reads while the vehicle is clear of the object's charted

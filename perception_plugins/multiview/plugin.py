@@ -6,7 +6,8 @@ names, `mission.plugin_settings`) and `settings["multiview"]`: `views` (how many
 `approach` ("1", "2a", "2b" or "3"; default "2b") and, optionally, more `models`. A request names the object
 through its point sets; the prior T_cam_object (database frame) chooses the views nearest the camera. The result's
 transform is expressed in the database frame through the model's `T_database_object`; `details` hold the
-approach, the elements matched (`elements`: points, lines, corners) and the recognition table (`table`).
+approach, the elements matched (`elements`: points, lines, corners), the recognition table (`table`) and the
+identification decision (`decision`, or `reason` when the object is not recognised).
 """
 
 from __future__ import annotations
@@ -85,6 +86,7 @@ class MultiviewReferencingPlugin:
                 model_pts.append(apply(T_db_object @ v.view.T_object_view, v.view.points[pairs[:, 0]]))
                 cam_pts.append(cloud.points_cam[pairs[:, 1]])
         details["model"] = str(self.paths[model.object_id])
+        details["decision"] = details.pop("reason")  # a "reason" is what an agent reports for a failure
         set_id = visible_set(request, T_cam_db, frame.K, (w, h))
         return ReferencingResult(True, set_id, T_cam_db, r.matched_points, r.rms, False,
                                  r.cloud_points, details, np.vstack(model_pts), np.vstack(cam_pts))

@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from perception_plugins.stereo import RectifiedStereo, triangulate
+from perception_plugins.stereo import RectifiedStereo, refine_disparities, triangulate
 
 Array = NDArray[np.float64]
 Image = NDArray[np.uint8]
@@ -88,7 +88,7 @@ def lk(previous: Image, current: Image, points: Array, guess: Array | None = Non
 
 def stereo_match(left: Image, right: Image, uv_left: Array, geometry: RectifiedStereo,
                  disparity_guess: Array | float = 0.0, row_tol: float = 1.0, fb_tol: float = 0.5,
-                 min_disparity: float = 0.5) -> tuple[Array, NDArray[np.bool_]]:
+                 min_disparity: float = 0.5, min_ncc: float = 0.4) -> tuple[Array, NDArray[np.bool_]]:
     """Right-image positions of left pixels on a rectified pair by LK, seeded at u − `disparity_guess`; a match
     counts when it stays within `row_tol` px of its row, has at least `min_disparity` px of disparity and the
     right → left track returns within `fb_tol` px."""
@@ -100,6 +100,10 @@ def stereo_match(left: Image, right: Image, uv_left: Array, geometry: RectifiedS
     ok &= ok_back & (np.abs(uv_r[:, 1] - uv_left[:, 1]) <= row_tol) & (d >= min_disparity)
     ok &= np.linalg.norm(back - uv_left, axis=1) <= fb_tol
     uv_r[:, 1] = uv_left[:, 1]
+    # The two windows must look alike (zero-mean normalised correlation): LK also "converges" on featureless
+    # noise (a sediment cloud, a lamp failure), where no texture backs the match.
+    _, _, score, _ = refine_disparities(left, right, uv_left, uv_r, half=4, search=2, min_score=min_ncc)
+    ok &= score >= min_ncc
     return uv_r, ok
 
 

@@ -11,6 +11,7 @@ push (a halved step emits the shorter position and then the rest of the buffer a
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -28,7 +29,7 @@ from perception_plugins.vo.adaptive import (
 from perception_plugins.vo.chain import Chain
 from perception_plugins.vo.classic import ClassicMatcher
 from perception_plugins.vo.errors import VoError
-from perception_plugins.vo.frontend import Array, Frontend
+from perception_plugins.vo.frontend import Array, Frontend, Step
 from perception_plugins.vo.klt import KltTracker
 from perception_plugins.vo.network import NetworkSettings, ReferenceNetwork
 from perception_plugins.vo.se3 import from_rotvec_translation, invert, to_rotvec
@@ -61,6 +62,10 @@ class OdometerSettings:
     """Adaptive mode: generate features only where the next position is predicted to see too (third mechanism)."""
     threshold_px: float = 1.5
     calibrate_offset: bool = True
+    max_motion_depths: float = 1.0
+    """A step moving farther than this many scene depths is rejected as a failure (the views could not overlap)."""
+    max_turn_deg: float = 30.0
+    """A step turning more than this is rejected as a failure."""
     """KLT: estimate the pair's disparity offset from the fragments' motion (self-calibration)."""
     fps: float | None = None
     """Frame rate for the adaptive step; from the frames' times when None."""
@@ -176,7 +181,12 @@ class Odometer:
             dt = self._dt(last, index, frame)
             T_last_b_pred = self._predict(dt)
             T_key_pred = invert(key.T_origin) @ last.T_origin @ T_last_b_pred
-            step = self.frontend.track(frame, T_key_pred)
+            step = self._plausible(self.frontend.track(frame, T_key_pred))
+            if (step is None or step.count < s.min_features) and self._velocity is not None:
+                # The prediction itself may be what failed (a turn, a stop): try again without it.
+                retry = self._plausible(self.frontend.track(frame, None))
+                if retry is not None and (step is None or retry.count > step.count):
+                    step = retry
             if step is not None and step.count >= s.min_features:
                 break
             if s.adaptive and n > 1:
@@ -222,6 +232,18 @@ class Odometer:
             self._next_target()
         self._last = _Position(index, frame.time, T_origin_b)
         return Estimate(index, T_origin_b, step.count, bound_to=bound)
+
+    def _plausible(self, step: Step | None) -> Step | None:
+        """None for a motion no tracker could have followed: farther than `max_motion_depths` times the scene's
+        depth, or turned by more than `max_turn_deg` — what a wrong RANSAC consensus on a few features gives."""
+        if step is None:
+            return None
+        s = self.settings
+        reach = s.max_motion_depths * (self._depth if self._depth is not None else math.inf)
+        turn = float(np.degrees(np.linalg.norm(to_rotvec(step.T_key_b[:3, :3]))))
+        if float(np.linalg.norm(step.T_key_b[:3, 3])) > reach or turn > s.max_turn_deg:
+            return None
+        return step
 
     def _restart(self, index: int, frame: StereoImages, T_origin_b: Array) -> None:
         self.frontend.start(frame)

@@ -124,9 +124,9 @@ def meander(
         runs = order_tasks(scene, tasks.all, s_xy, f_xy)
         options.append((estimated_length(scene, runs), tasks.sweep, runs, len(tasks.cells), "boustrophedon-cells",
                         headland))
-    # the contour passes fill the cells' lines to the tolerance and cut lines keep what they covered; plans built
-    # otherwise (round rings, cut single-direction rows) may leave no more uncovered than the tolerance or, if
-    # that leaves more, than the single-direction plan does
+    # the contour passes fill what the cells' lines leave to the tolerance; plans built otherwise (round rings, cut
+    # single-direction rows) may leave no more uncovered than the tolerance or, if that leaves more, than the
+    # single-direction plan does
     def allowed() -> float:
         return max(fill_tolerance * scene.free.area, uncovered_area(scene, base_runs)) + 1e-6
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 from numpy.typing import NDArray
+from shapely.geometry.base import BaseGeometry
 
 from .baseline import single_direction_runs
 from .cells import cell_variants, decompose
@@ -26,7 +27,7 @@ from .metrics import swept, uncovered
 from .ordering import order_variants
 from .runs import Run
 from .scene import Scene
-from .sweep import Sweep
+from .sweep import Piece, Sweep
 from .trims import trim_to_need, trim_to_neighbours
 
 Array = NDArray[np.float64]
@@ -100,33 +101,44 @@ def uncovered_area(scene: Scene, runs: Sequence[Run]) -> float:
 
 def trimmed(scene: Scene, plan: Tasks, tolerance: float) -> Tasks:
     """The cells re-planned with their lines cut back to what the other passes leave uncovered and then to what
-    the neighbouring lines' swaths leave of their bands, if that keeps the coverage (at most `tolerance` of the
-    free area, or what the uncut lines left, uncovered); failing that, cut back to the other passes only; failing
-    that too, `plan`."""
-    sweep, tasks = plan.sweep, plan.cells
+    the neighbouring lines' swaths leave of their bands; failing that, cut back to the other passes only; failing
+    that too, as they were. Contour passes are added for what the (re-planned) lines leave uncovered beyond the
+    tolerance (turns next to zones may pull line ends back); a cut is kept if at most `tolerance` of the free
+    area, or no more than the uncut lines left, stays uncovered."""
+    sweep = plan.sweep
     others = [seg for variants in plan.extra for seg in variants[0].lines]
+    budget = tolerance * scene.free.area + 1e-6
     try:
         covered = swept(others, scene.swath) if others else None
         need = scene.free if covered is None else scene.free.difference(covered)
         first = sweep if covered is None else trim_to_need(sweep, need, covered)
         second = trim_to_neighbours(first, need, scene.swath)
     except shapely.errors.GEOSException:          # cutting is an optimisation: a topology failure keeps the lines
-        return plan
+        second = first = sweep
+        need = scene.free
 
-    def left(cells: list[list[Run]]) -> float:
-        return float(need.difference(swept(common_lines(cells, sweep.heading_deg), scene.swath)).area)
+    def gap(cells: list[list[Run]]) -> BaseGeometry:
+        return need.difference(swept(common_lines(cells, sweep.heading_deg), scene.swath))
 
-    allowed: float | None = None
-    for cut in (second, first):
-        if cut.pieces == sweep.pieces or not cut.pieces:
+    uncut: float | None = None
+    tried: list[tuple[Piece, ...]] = []
+    for cut in (second, first, sweep):
+        if cut.pieces in tried or not cut.pieces:
             continue
-        cut_tasks = cell_variants(Joiner(scene, cut), decompose(cut))
-        missed = left(cut_tasks)
-        if missed > tolerance * scene.free.area + 1e-6:
-            allowed = left(tasks) if allowed is None else allowed
-            if missed > allowed + 1e-6:
+        tried.append(cut.pieces)
+        cells = plan.cells if cut is sweep else cell_variants(Joiner(scene, cut), decompose(cut))
+        left = gap(cells)
+        extra = plan.extra
+        if left.area > budget and scene.has_zones:
+            top = contour_runs(scene, left, sweep.spacing, tolerance)
+            if top:
+                left = left.difference(swept([seg for run in top for seg in run.lines], scene.swath))
+                extra = extra + [[run, run.reversed()] for run in top]
+        if cut is not sweep and left.area > budget:
+            uncut = gap(plan.cells).area if uncut is None else uncut
+            if left.area > uncut + 1e-6:
                 continue
-        return Tasks(cut, cut_tasks, plan.extra)
+        return Tasks(cut, cells, extra)
     return plan
 
 
