@@ -38,7 +38,7 @@ SEARCH_ALTITUDE_M = 5.0  # searching: a wider view, at most
 SEABED_RANGE_MARGIN_M = 1.5  # the seabed kept this far inside the stereo range while searching
 FOOTPRINT_MARGIN_M = 3.0  # the altimeter reads the seabed only this far clear of the charted footprint
 SEARCH_STEP_M = 1.5  # expanding-square leg unit: well inside the footprint at the search altitude
-SEARCH_POSITIONS = 9  # per set
+SEARCH_POSITIONS = 13
 SETTLE_S = 2.0
 FINE_VIEWS = 3  # recognised views fused into one fix
 FINE_SHIFT_M = 0.15  # successive fine views move this far along the object's x-axis
@@ -117,6 +117,7 @@ class InspectAgent(Agent):
         wanted = [t.id for t in self.obj.targets] if p.targets == "all" else list(p.targets)
         self.targets = {t.id: t for t in self.obj.targets if t.id in wanted}
         self.T_wo = database_pose(self.obj)  # T_world_object in the navigation frame: database, then fixes
+        self._survey_prior(context)
         self.T_wo_trusted = self.T_wo.copy()  # the database pose or the last fused fix
         self.search_started: float | None = None
         self.seabed_depth: float | None = None  # from the altimeter while not over the object
@@ -166,6 +167,20 @@ class InspectAgent(Agent):
             self.fail(f"object '{self.obj.id}' has no targets {missing}")
             return
         self._next(context.nav)
+
+    def _survey_prior(self, context: AgentContext) -> None:
+        """When a survey of this mission detected the object, centre the charted footprint on the detection (the
+        survey's position is good to a metre or two, often better than the database's; heading kept)."""
+        found = [d for d in context.knowledge.detections if d.database_id == self.obj.id]
+        if not found:
+            return
+        det = found[-1]
+        length, width, _ = self.obj.size
+        centre = transform_points(self.T_wo, np.array([[length / 2, width / 2, 0.0]]))[0]
+        shift = np.array([det.north - centre[0], det.east - centre[1], 0.0])
+        self.T_wo[:3, 3] += shift
+        context.emit("prior_from_survey", context.nav.time, element=context.element.id, detection=det.id,
+                     shift_m=[round(float(x), 3) for x in shift[:2]])
 
     def _candidates(self, reference: str, at: Any) -> list[str]:
         """The target's own set first, then the others by distance (for re-binding when a set fails)."""
@@ -322,9 +337,10 @@ class InspectAgent(Agent):
             if self.params.search.pattern == "expanding-square" else meander_offsets(SEARCH_STEP_M,
                                                                                       SEARCH_POSITIONS)
         first = self.search_first
-        order = [first, *(s for s in self.sets if s != first)]
-        # Ring by ring of the pattern, over every set in turn (the planned one first): any set will do.
-        self.search_goals[:] = [self._over_set(s, self._search_altitude(s), o) for o in offsets for s in order]
+        others = [s for s in self.sets if s != first]
+        # Over every set as currently placed (any set will do), then the pattern around the planned one.
+        self.search_goals[:] = [self._over_set(s, self._search_altitude(s)) for s in (first, *others)] + \
+            [self._over_set(first, self._search_altitude(first), o) for o in offsets[1:]]
 
     def _sound_seabed(self, nav: NavState) -> None:
         """Keep the seabed depth the altimeter reads while the vehicle is clear of the object's charted
