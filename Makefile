@@ -17,7 +17,7 @@ demo: $(STAMP)
 	$(BIN)/auv simulate missions/field_survey.yaml --out runs/demo
 
 test: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m pytest
+	MPLBACKEND=Agg $(BIN)/python -m pytest -n auto --dist worksteal
 
 lint: $(STAMP)
 	$(BIN)/ruff check mission planners perception_plugins tests
