@@ -13,7 +13,7 @@ POSES = {"a": (100.0, 0.0), "b": (10.0, 5.0), "c": (55.0, -40.0), "d": (60.0, 30
 
 
 def several_objects() -> Mission:
-    data = yaml.safe_load((MISSIONS / "manifold_inspection.yaml").read_text())
+    data = yaml.safe_load((MISSIONS.parent / "docs" / "missions" / "manifold_inspection.yaml").read_text())
     template = data["objects"][0]
     data["objects"] = [{**template, "id": f"obj-{k}", "pose": {**template["pose"], "north": n, "east": e}}
                        for k, (n, e) in POSES.items()]

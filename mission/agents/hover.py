@@ -25,8 +25,10 @@ class Goal:
 
 
 def hover_command(nav: NavState, goal: Goal, speed: float, tolerance: float = 0.3,
-                  depth_tolerance: float = DEPTH_TOLERANCE_M) -> tuple[Command, bool]:
-    """The command that brings the vehicle to `goal`, and whether it is there now.
+                  depth_tolerance: float = DEPTH_TOLERANCE_M, station_m: float = STATION_M
+                  ) -> tuple[Command, bool]:
+    """The command that brings the vehicle to `goal`, and whether it is there now: cruising towards it beyond
+    `station_m`, station-keeping (any direction, slowly) within.
 
     >>> nav = NavState(0, 0.0, 0.0, 10.0, 90.0, 0.0, 5.0, 0.1, 100.0)
     >>> hover_command(nav, Goal(10.0, 0.0, 10.0, 90.0), 1.0)[0].heading
@@ -37,7 +39,7 @@ def hover_command(nav: NavState, goal: Goal, speed: float, tolerance: float = 0.
     distance = math.hypot(goal.north - nav.north, goal.east - nav.east)
     aligned = abs(wrap_deg(nav.heading - goal.heading)) <= HEADING_TOLERANCE_DEG
     there = distance <= tolerance and abs(nav.depth - goal.depth) <= depth_tolerance and aligned
-    if distance > STATION_M:
+    if distance > station_m:
         heading = math.degrees(math.atan2(goal.east - nav.east, goal.north - nav.north)) % 360.0
         return Command(heading, min(speed, max(0.3, 0.2 * distance)), depth=goal.depth), False
     return Command(goal.heading, 0.0, depth=goal.depth, station=(goal.north, goal.east)), there

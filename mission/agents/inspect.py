@@ -38,7 +38,7 @@ SEARCH_ALTITUDE_M = 5.0  # searching: a wider view, at most
 SEABED_RANGE_MARGIN_M = 1.5  # the seabed kept this far inside the stereo range while searching
 FOOTPRINT_MARGIN_M = 3.0  # the altimeter reads the seabed only this far clear of the charted footprint
 SEARCH_STEP_M = 1.5  # expanding-square leg unit: well inside the footprint at the search altitude
-SEARCH_POSITIONS = 13
+SEARCH_POSITIONS = 9  # pattern positions around each set
 SETTLE_S = 2.0
 FINE_VIEWS = 3  # recognised views fused into one fix
 FINE_SHIFT_M = 0.15  # successive fine views move this far along the object's x-axis
@@ -57,6 +57,7 @@ SET_COST_M = 8.0  # a set's search and referencing, in metres of travel, for the
 HOVER_SPEED_M_S = 1.0
 CLEARANCE_MARGIN_M = 1.0  # above the minimum altitude when crossing the object
 ALTITUDE_MARGIN_M = 0.2  # kept above the mission's minimum altitude, by the altimeter, whatever the plan says
+STATION_RADIUS_M = 10.0  # over the object the vehicle hovers from stop to stop (cruising, it would circle)
 OVER_GOAL_M = 0.6  # descend to a goal's depth only within this horizontal distance of it
 
 
@@ -243,8 +244,9 @@ class InspectAgent(Agent):
             depth = min(goal.depth, self._clearance_depth())
             if nav.depth > depth + 0.3:
                 return Command(nav.heading, 0.0, depth=depth, station=(nav.north, nav.east)), False
-            return hover_command(nav, Goal(goal.north, goal.east, depth, goal.heading), self.speed)[0], False
-        return hover_command(nav, goal, self.speed, tolerance, depth_tolerance)
+            return hover_command(nav, Goal(goal.north, goal.east, depth, goal.heading), self.speed,
+                                 station_m=STATION_RADIUS_M)[0], False
+        return hover_command(nav, goal, self.speed, tolerance, depth_tolerance, STATION_RADIUS_M)
 
     def _altitude_floor(self, nav: NavState) -> float:
         """The deepest the vehicle may go here by its altimeter: the minimum altitude plus a margin."""
@@ -338,9 +340,9 @@ class InspectAgent(Agent):
                                                                                       SEARCH_POSITIONS)
         first = self.search_first
         others = [s for s in self.sets if s != first]
-        # Over every set as currently placed (any set will do), then the pattern around the planned one.
-        self.search_goals[:] = [self._over_set(s, self._search_altitude(s)) for s in (first, *others)] + \
-            [self._over_set(first, self._search_altitude(first), o) for o in offsets[1:]]
+        # Over every set as currently placed (any set will do), then the pattern around each in turn.
+        order = (first, *others)
+        self.search_goals[:] = [self._over_set(s, self._search_altitude(s), o) for o in offsets for s in order]
 
     def _sound_seabed(self, nav: NavState) -> None:
         """Keep the seabed depth the altimeter reads while the vehicle is clear of the object's charted

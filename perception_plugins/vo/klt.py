@@ -109,6 +109,11 @@ class KltTracker:
                                  doffs=geometry.doffs, estimate_offset=self.calibrate_offset)
         if motion is None:
             return step.T_key_b
+        # The refinement must stay near the tracked estimate, and the offset correction small: on noise (a
+        # sediment cloud) the joint fit can run off to a disparity near zero and an unbounded translation.
+        moved = float(np.linalg.norm(motion.T_a_b[:3, 3] - step.T_key_b[:3, 3]))
+        if abs(motion.disparity_offset) > 1.0 or moved > 0.2 * float(np.linalg.norm(step.T_key_b[:3, 3])) + 0.01:
+            return step.T_key_b
         if self.calibrate_offset:
             self.offsets.append(self._key_doffs + motion.disparity_offset)
             if len(self.offsets) >= 3:
