@@ -39,8 +39,10 @@ SEABED_RANGE_MARGIN_M = 1.5  # the seabed kept this far inside the stereo range 
 FOOTPRINT_MARGIN_M = 3.0  # the altimeter reads the seabed only this far clear of the charted footprint
 SEARCH_STEP_M = 1.5  # expanding-square leg unit: well inside the footprint at the search altitude
 SEARCH_POSITIONS = 9  # pattern positions around each set
+SEARCH_RAISE_M = 0.6  # every other ring of the search this much higher
 SETTLE_S = 2.0
 FINE_VIEWS = 3  # recognised views fused into one fix
+CONFIRM_TRIES = 4  # closer views that may fail to recognise a search hit's set before the hit is dropped
 FINE_SHIFT_M = 0.15  # successive fine views move this far along the object's x-axis
 SEARCH_PRIOR_RADIUS_M = 4.0  # how far the database pose plus navigation may be off
 FINE_PRIOR_RADIUS_M = 0.4  # how far the current estimate may be off once referenced
@@ -124,6 +126,7 @@ class InspectAgent(Agent):
         self.seabed_depth: float | None = None  # from the altimeter while not over the object
         self._sound_seabed(context.nav)
         self.search_goals: list[Goal] = []
+        self.unconfirmed: set[str] = set()  # sets whose search hit the closer views did not confirm
         self.search_index = 0
         self.fixed = False
         self.speed = min(context.mission.vehicle.cruise_speed, HOVER_SPEED_M_S)
@@ -329,7 +332,6 @@ class InspectAgent(Agent):
         # database places it (this one first), then the search pattern around it; one budget for the search.
         self.stage = "search"
         if not self.search_goals:
-            self.search_first = set_id
             self._plan_search()
         self.goals, self.goal_index = self.search_goals, self.search_index
         self.phase = "go"
@@ -338,11 +340,12 @@ class InspectAgent(Agent):
         offsets = expanding_square(SEARCH_STEP_M, SEARCH_POSITIONS) \
             if self.params.search.pattern == "expanding-square" else meander_offsets(SEARCH_STEP_M,
                                                                                       SEARCH_POSITIONS)
-        first = self.search_first
-        others = [s for s in self.sets if s != first]
-        # Over every set as currently placed (any set will do), then the pattern around each in turn.
-        order = (first, *others)
-        self.search_goals[:] = [self._over_set(s, self._search_altitude(s), o) for o in offsets for s in order]
+        # Any set will do: the most distinctive first (more points, more relief), ring by ring of the pattern
+        # around each set as currently placed, every other ring a little higher (recognition is sensitive to
+        # the range, and the database may be off in depth too).
+        order = sorted(self.sets, key=lambda s: (-len(self.sets[s]), -float(np.ptp(self.sets[s][:, 2])), s))
+        self.search_goals[:] = [self._over_set(s, self._search_altitude(s) + SEARCH_RAISE_M * (ring % 2), o)
+                                for ring, o in enumerate(offsets) for s in order]
 
     def _sound_seabed(self, nav: NavState) -> None:
         """Keep the seabed depth the altimeter reads while the vehicle is clear of the object's charted
@@ -385,7 +388,9 @@ class InspectAgent(Agent):
         radius = SEARCH_PRIOR_RADIUS_M if self.stage == "search" else FINE_PRIOR_RADIUS_M
         # Searching, any set that is in view will do (the more sets, the surer the identification); once the
         # object is placed, the set the plan visits.
-        ids = [s for s in self.sets if s not in self.plan.failed] if self.stage == "search" else [self.set_id]
+        ids = [s for s in self.sets if s not in self.plan.failed and s not in self.unconfirmed] \
+            if self.stage == "search" else [self.set_id]
+        ids = ids or [s for s in self.sets if s not in self.plan.failed] or list(self.sets)
         models = tuple(PointSetModel(self.obj.id, s, self.sets[s]) for s in ids)
         t0 = time.perf_counter()
         result = self.context.plugins.process("referencing", frame, ReferencingRequest(
@@ -455,12 +460,13 @@ class InspectAgent(Agent):
             self._odometry(frame, nav)  # the frame still carries the odometry chain
         if self.stage == "fine":
             self.fine_tries += 1
-            if self.fine_tries <= 2 * FINE_VIEWS:
+            if self.fine_tries <= (2 * FINE_VIEWS if self.fixed else CONFIRM_TRIES):
                 self.phase = "go"
             elif self.fixed:
                 self._set_failed(nav, "not recognised from above the set")
-            else:  # the search's hit was not confirmed: drop it and search on
+            else:  # the search's hit was not confirmed: drop it, and trust no more search hits on this set
                 self.T_wo = self.T_wo_trusted.copy()
+                self.unconfirmed.add(self.set_id)
                 self.context.emit("search_hit_dropped", nav.time, element=self.context.element.id, set=self.set_id)
                 self._resume_search(nav)
             return
