@@ -106,8 +106,8 @@ class Scanner3D:
     one MuJoCo model, or a `LocalWorld` that follows the vehicle."""
 
     def __init__(self, world: MjWorld | LocalWorld, fov_deg: tuple[float, float] = (60.0, 45.0),
-                 max_range: float = 12.0, rate_hz: float = 2.0, rays: tuple[int, int] = DEFAULT_RAYS, tilt_deg: float = DEFAULT_TILT_DEG,
-                 range_sigma: float = 0.01, seed: int = 0) -> None:
+                 max_range: float = 12.0, rate_hz: float = 2.0, rays: tuple[int, int] = DEFAULT_RAYS,
+                 tilt_deg: float = DEFAULT_TILT_DEG, range_sigma: float = 0.01, seed: int = 0) -> None:
         if not (max_range > 0.0 and math.isfinite(max_range)):
             raise ValueError(f"scanner max_range must be a positive number of metres, got {max_range}")
         if rate_hz <= 0.0:
