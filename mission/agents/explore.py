@@ -45,10 +45,9 @@ from mission.agents.station_path import StationPath
 from mission.frames import rotation_zyx, wrap_deg
 from mission.language.models import Explore
 from mission.vehicle import Command, NavState, Observation, ScanFrame
-from planners.nbv import NbvPlanner, Scan, Scanner, View, Views, Weights, candidate_views, connect, segment_safe
+from planners.nbv import NbvPlanner, Scan, Scanner, View, Views, Weights, connect, segment_safe
 from planners.nbv.candidates import is_safe_view
 from planners.nbv.grid import FREE, UNKNOWN, StateGrid
-from planners.nbv.utility import view_utility
 
 RESOLUTION_M = 0.25
 PLANNING_RAYS = (24, 18)  # the planner's model of the frustum; the sensor itself has more rays
@@ -80,7 +79,7 @@ class FixedMountNbv(NbvPlanner):
     pitch_deg: float = -25.0
     focus: np.ndarray | None = None
 
-    def focused(self) -> tuple[StateGrid, np.ndarray]:
+    def utility_grid(self) -> tuple[StateGrid, np.ndarray]:
         """The state grid the utility sees, and the contour ids that count."""
         contour = self.derived.contour_ids()
         if self.focus is None:
@@ -89,29 +88,8 @@ class FixedMountNbv(NbvPlanner):
         states[(states == UNKNOWN) & ~self.focus] = FREE
         return StateGrid(states, self.grid.key_lo, self.grid.resolution), contour[self.focus.reshape(-1)[contour]]
 
-    def propose(self, pose: View) -> View | None:
-        from planners.nbv.planner import Proposal
-
-        t0 = time.perf_counter()
-        grid, contour = self.focused()
-        views = candidate_views(grid, self.safety, pose.point, self.scanner, count=self.candidates,
-                                safe_distance=self.safe_distance, band=self.band, rng=self.rng, contour=contour,
-                                max_rounds=self.candidate_rounds)
-        views = Views(views.positions, views.heading_deg, np.full(len(views), self.pitch_deg))
-        if self.rejected and len(views):
-            near = np.min(np.linalg.norm(views.positions[:, None, :] - np.asarray(self.rejected)[None], axis=2),
-                          axis=1)
-            views = views.select(near > self.grid.resolution * 2.0)
-        if not len(views):
-            self.last = Proposal(views, None, -1, time.perf_counter() - t0)
-            return None
-        terms = view_utility(grid, views, pose.point, self.scanner, self.weights, min_overlap=self.min_overlap,
-                             contour=contour)
-        best = int(np.argmax(np.where((terms.f > 0) | (terms.ct > 0), terms.u, -1.0)))
-        self.last = Proposal(views, terms, best, time.perf_counter() - t0)
-        if terms.f.max() < self.min_unknown:
-            return None
-        return views[best]
+    def mounted(self, views: Views) -> Views:
+        return Views(views.positions, views.heading_deg, np.full(len(views), self.pitch_deg))
 
 
 def object_region(grid: StateGrid, target: Target, seabed: float) -> np.ndarray:

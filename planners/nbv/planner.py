@@ -81,10 +81,10 @@ class NbvPlanner(MapKeeping):
     def propose(self, pose: View) -> View | None:
         """The next best view from `pose`, or None when no candidate would reveal `min_unknown` voxels."""
         t0 = time.perf_counter()
-        contour = self.derived.contour_ids()
-        views = candidate_views(self.grid, self.safety, pose.point, self.scanner, count=self.candidates,
-                                safe_distance=self.safe_distance, band=self.band, rng=self.rng, contour=contour,
-                                max_rounds=self.candidate_rounds)
+        grid, contour = self.utility_grid()
+        views = self.mounted(candidate_views(grid, self.safety, pose.point, self.scanner, count=self.candidates,
+                                             safe_distance=self.safe_distance, band=self.band, rng=self.rng,
+                                             contour=contour, max_rounds=self.candidate_rounds))
         if self.rejected and len(views):
             near = np.min(np.linalg.norm(views.positions[:, None, :] - np.asarray(self.rejected)[None], axis=2),
                           axis=1)
@@ -92,7 +92,7 @@ class NbvPlanner(MapKeeping):
         if not len(views):
             self.last = Proposal(views, None, -1, time.perf_counter() - t0)
             return None
-        terms = view_utility(self.grid, views, pose.point, self.scanner, self.weights, min_overlap=self.min_overlap,
+        terms = view_utility(grid, views, pose.point, self.scanner, self.weights, min_overlap=self.min_overlap,
                              contour=contour)
         # A view that would reveal nothing and follow no contour is not worth the move, however near it is.
         best = int(np.argmax(np.where((terms.f > 0) | (terms.ct > 0), terms.u, -1.0)))
@@ -100,6 +100,15 @@ class NbvPlanner(MapKeeping):
         if terms.f.max() < self.min_unknown:
             return None
         return views[best]
+
+    def utility_grid(self) -> tuple[StateGrid, NDArray[np.int64]]:
+        """The state grid candidates and the utility see, and the contour voxel ids that count (a subclass may
+        narrow them to a region of interest)."""
+        return self.grid, self.derived.contour_ids()
+
+    def mounted(self, views: Views) -> Views:
+        """Candidates as the sensor's mount allows them (here: as generated)."""
+        return views
 
     def reject(self, view: View) -> None:
         """Mark a proposed view as unreachable."""
