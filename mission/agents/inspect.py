@@ -34,9 +34,7 @@ from mission.vehicle import Command, NavState, Observation
 from planners.ordering import Stop
 
 FINE_ALTITUDE_M = 3.6  # above a set's top for the precise referencing (seed 000's experiments)
-SEARCH_ALTITUDE_M = 5.0  # searching: a wider view, at most
-SEABED_RANGE_MARGIN_M = 1.5  # the seabed kept this far inside the stereo range while searching
-FOOTPRINT_MARGIN_M = 3.0  # the altimeter reads the seabed only this far clear of the charted footprint
+SEARCH_ALTITUDE_M = 5.0  # above a set's top while searching: a wide view
 SEARCH_STEP_M = 1.5  # expanding-square leg unit: well inside the footprint at the search altitude
 SEARCH_POSITIONS = 9  # pattern positions around each set
 SEARCH_RAISE_M = 0.6  # every other ring of the search this much higher
@@ -123,8 +121,6 @@ class InspectAgent(Agent):
         self._survey_prior(context)
         self.T_wo_trusted = self.T_wo.copy()  # the database pose or the last fused fix
         self.search_started: float | None = None
-        self.seabed_depth: float | None = None  # from the altimeter while not over the object
-        self._sound_seabed(context.nav)
         self.search_goals: list[Goal] = []
         self.unconfirmed: set[str] = set()  # sets whose search hit the closer views did not confirm
         self.search_index = 0
@@ -344,29 +340,8 @@ class InspectAgent(Agent):
         # around each set as currently placed, every other ring a little higher (recognition is sensitive to
         # the range, and the database may be off in depth too).
         order = sorted(self.sets, key=lambda s: (-len(self.sets[s]), -float(np.ptp(self.sets[s][:, 2])), s))
-        self.search_goals[:] = [self._over_set(s, self._search_altitude(s) + SEARCH_RAISE_M * (ring % 2), o)
+        self.search_goals[:] = [self._over_set(s, SEARCH_ALTITUDE_M + SEARCH_RAISE_M * (ring % 2), o)
                                 for ring, o in enumerate(offsets) for s in order]
-
-    def _sound_seabed(self, nav: NavState) -> None:
-        """Keep the seabed depth the altimeter reads while the vehicle is clear of the object's charted
-        footprint (with a margin for the database's error)."""
-        if nav.altitude is None:
-            return
-        x, y, _ = transform_points(invert(database_pose(self.obj)), np.array([[nav.north, nav.east, nav.depth]]))[0]
-        length, width, _ = self.obj.size
-        m = FOOTPRINT_MARGIN_M
-        if not (-m <= x <= length + m and -m <= y <= width + m):
-            self.seabed_depth = nav.depth + nav.altitude
-
-    def _search_altitude(self, set_id: str) -> float:
-        """High for a wide view, but low enough that the seabed around the set stays within stereo range: its
-        texture gives the cloud most of its points (a plain deck alone gives too few)."""
-        stereo = self.context.mission.sensors.stereo
-        if stereo is None or self.seabed_depth is None:
-            return SEARCH_ALTITUDE_M
-        top = float(transform_points(self.T_wo, self.sets[set_id])[:, 2].min())
-        room = stereo.max_range - (self.seabed_depth - top) - SEABED_RANGE_MARGIN_M
-        return float(np.clip(room, FINE_ALTITUDE_M, SEARCH_ALTITUDE_M))
 
     def _begin_fine(self, set_id: str) -> None:
         self.set_id, self.stage = set_id, "fine"
@@ -462,6 +437,13 @@ class InspectAgent(Agent):
             self.fine_tries += 1
             if self.fine_tries <= (2 * FINE_VIEWS if self.fixed else CONFIRM_TRIES):
                 self.phase = "go"
+            elif self.fixed and ("set", self.set_id) in self.done:
+                # Recognised here before: this re-referencing did not work, the set is still good. Go on by
+                # odometry (its chain continues) rather than give the set up.
+                self.context.emit("rereference_failed", nav.time, element=self.context.element.id, set=self.set_id,
+                                  odometry_path_m=round(self.vo_path, 3))
+                self.vo_path, self.vo_lost = 0.0, 0  # the next attempt is due after as much motion again
+                self._next(nav)
             elif self.fixed:
                 self._set_failed(nav, "not recognised from above the set")
             else:  # the search's hit was not confirmed: drop it, and trust no more search hits on this set
@@ -571,11 +553,6 @@ class InspectAgent(Agent):
     # -- the loop ------------------------------------------------------------------------------------------------
     def step(self, observation: Observation) -> Command:
         nav = observation.nav
-        if self.search_started is None and self.search_goals:  # still approaching: the seabed may be read
-            known = self.seabed_depth
-            self._sound_seabed(nav)
-            if self.seabed_depth is not None and self.seabed_depth != known:
-                self._plan_search()
         frame = observation.stereo[-1] if observation.stereo else None
         if self.task is None:
             return Command.hold(nav)
