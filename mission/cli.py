@@ -9,6 +9,7 @@ import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from mission.errors import AuvError, MissionError
 
@@ -46,6 +47,8 @@ def _simulate(args: argparse.Namespace) -> int:
 
     mission = load_mission(args.mission)
     check_supported(mission)
+    if args.seeds is not None:
+        return _campaign(args, mission.name)
     out = Path(args.out) if args.out else Path("runs") / mission.name
     result = simulate(mission, seed=args.seed, out=out, plots=not args.no_plots, progress=not args.quiet,
                       record_stereo=args.record_stereo)
@@ -63,6 +66,36 @@ def _simulate(args: argparse.Namespace) -> int:
         pairs = len(result.vehicle.log.frames)
         print(f"stereo stream: {pairs} pair(s) in {out / 'stereo'} (KITTI layout; `auv vo {out / 'stereo'}`)")
     return 0 if m["completed"] else 1
+
+
+def _campaign(args: argparse.Namespace, name: str) -> int:
+    from mission.sim.campaign import parse_seeds, run_campaign
+
+    if args.seed is not None or args.record_stereo:
+        raise AuvError("--seeds runs many seeded runs: it does not combine with --seed or --record-stereo")
+    seeds = parse_seeds(args.seeds)
+    out = Path(args.out) if args.out else Path("runs") / f"{name}-seeds"
+    print(f"{name}: {len(seeds)} seeded run(s), {args.jobs} at a time, into {out}/seed-N/")
+
+    def line(row: dict[str, Any]) -> None:
+        if "error" in row:
+            print(f"  seed {row['seed']:>5}  CRASHED  {row['error']}", flush=True)
+            return
+        state = "completed" if row["completed"] else ("ABORTED" if row["aborted"] else "not completed")
+        failed = [i for i, e in row["elements"].items() if e["status"] != "succeeded"]
+        print(f"  seed {row['seed']:>5}  {state:<13} {row['mission_time_s']:7.0f} s  wall {row['wall_time_s']:6.0f} s"
+              + (f"  failed: {', '.join(failed)}" if failed else ""), flush=True)
+
+    report = run_campaign(args.mission, seeds, out, jobs=args.jobs, plots=not args.no_plots, on_run=line)
+    s = report["summary"]
+    print(f"completed {s['completed']}/{s['runs']} ({s['completed_percent']:g} %), aborted {s['aborted']}, "
+          f"crashed {s['crashed']}, safety violations {s['safety_violations']}")
+    for ident, e in s["elements"].items():
+        worst = ", ".join(f"{k[6:]} {v}" for k, v in e.items() if k.startswith("worst_"))
+        tail = f"; worst {worst}" if worst else ""
+        print(f"  {ident:<24} {e['kind']:<9} succeeded {e['succeeded']}/{e['runs']}{tail}")
+    print(f"campaign: {out / 'campaign.json'}")
+    return 0 if s["completed"] == s["runs"] else 1
 
 
 def _plot(args: argparse.Namespace) -> int:
@@ -176,6 +209,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("mission", help="mission YAML file")
     p.add_argument("--out", help="run folder (default: runs/MISSION_NAME)")
     p.add_argument("--seed", type=int, help="random seed (default: the mission's)")
+    p.add_argument("--seeds", metavar="LIST", help="many seeded runs, e.g. 1-20 or 1,5,9: OUT/seed-N/ each and "
+                   "OUT/campaign.json with the completion rate and the worst figures (default OUT runs/NAME-seeds)")
+    p.add_argument("--jobs", type=int, default=1, help="with --seeds, runs at a time (processes; default 1)")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.add_argument("--record-stereo", action="store_true",

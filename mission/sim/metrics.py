@@ -67,7 +67,7 @@ def _reference_truth(item: dict[str, Any], vehicle: SimulatedVehicle, scene: Sce
 
 
 def _element_metrics(report: ExecutionReport, times: np.ndarray, north: np.ndarray, east: np.ndarray,
-                     vehicle: SimulatedVehicle, scene: Scene) -> list[dict[str, Any]]:
+                     altitude: np.ndarray, vehicle: SimulatedVehicle, scene: Scene) -> list[dict[str, Any]]:
     mission = vehicle.mission
     out = []
     step = np.hypot(np.diff(north, prepend=north[:1]), np.diff(east, prepend=east[:1])) if len(north) else north
@@ -84,6 +84,8 @@ def _element_metrics(report: ExecutionReport, times: np.ndarray, north: np.ndarr
         if math.isfinite(rep.end_time) and len(times):
             window = (times > rep.start_time) & (times <= rep.end_time)
             item["path_length_m"] = round(float(step[window].sum()), 2)
+            if window.any():  # the true altitude above whatever lies below (seabed or object)
+                item["min_altitude_m"] = round(float(altitude[window].min()), 3)
         item.update(copy.deepcopy(rep.details))
         if rep.kind == "survey":
             _survey_truth(item, rep, mission, scene)
@@ -126,7 +128,7 @@ def run_metrics(mission_name: str, seed: int, report: ExecutionReport, vehicle: 
         "distance_m": round(vehicle.distance_m, 2),
         "energy_wh": round(vehicle.energy_used_wh, 2),
         "energy_remaining_percent": round(100.0 * (1.0 - vehicle.energy_used_wh / capacity), 2),
-        "elements": _element_metrics(report, times, north, east, vehicle, scene),
+        "elements": _element_metrics(report, times, north, east, arr[:, 5], vehicle, scene),
         "safety_violations": report.violations,
         "seabed_contacts": vehicle.log.seabed_contacts,
         "navigation": {
