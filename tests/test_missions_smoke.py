@@ -69,6 +69,10 @@ def test_mission_validates_and_simulates(path, tmp_path):
             if hidden is not None:  # the hidden set failed, the order was re-planned, and it went on without it
                 assert [r["failed_set"] for r in element["replans"]].count(hidden) >= 1
                 assert not any(a["recognised"] and a.get("recognised_set") == hidden for a in element["attempts"])
+    # The vehicle truly keeps the minimum altitude above the seabed and the objects throughout.
+    for element in m["elements"]:
+        if "min_altitude_m" in element:
+            assert element["min_altitude_m"] >= mission.safety.min_altitude, element["id"]
     # The mission as run is itself a valid mission with the same route.
     again = load_mission(tmp_path / "run" / "mission.yaml")
     assert [e.id for e in again.route] == [e.id for e in mission.route]

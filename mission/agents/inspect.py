@@ -33,8 +33,10 @@ from mission.plugin_api import OdometryRequest, OdometryResult, PointSetModel, R
 from mission.vehicle import Command, NavState, Observation
 from planners.ordering import Stop
 
-FINE_ALTITUDE_M = 3.6  # above a set's top for the precise referencing (seed 000's experiments)
-SEARCH_ALTITUDE_M = 5.0  # above a set's top while searching: a wide view
+FINE_ALTITUDE_M = 3.6  # above a set's top for the precise referencing (seed 000's experiments), at the least
+SEARCH_ALTITUDE_M = 5.0  # above a set's top while searching: a wide view, at the least
+VIEW_FILL = 0.75  # a set spans at most this share of the image's width and height in its fine view
+RANGE_MARGIN_M = 0.5  # the set's deepest point stays this far inside the stereo range
 SEARCH_STEP_M = 1.5  # expanding-square leg unit: well inside the footprint at the search altitude
 SEARCH_POSITIONS = 9  # pattern positions around each set
 SEARCH_RAISE_M = 0.6  # every other ring of the search this much higher
@@ -114,6 +116,9 @@ class InspectAgent(Agent):
         self.obj = context.mission.object(p.object)
         stereo = context.mission.sensors.stereo
         self.baseline = stereo.baseline if stereo is not None else 0.0
+        # the image's field at unit range (width, height) and how far the cameras see
+        self.field = (stereo.width / stereo.fx, stereo.height / stereo.fx) if stereo is not None else (1.2, 0.9)
+        self.max_range = stereo.max_range if stereo is not None else math.inf
         self.sets = {s.id: np.asarray(s.points, dtype=float) for s in self.obj.characteristic_points}
         wanted = [t.id for t in self.obj.targets] if p.targets == "all" else list(p.targets)
         self.targets = {t.id: t for t in self.obj.targets if t.id in wanted}
@@ -218,12 +223,30 @@ class InspectAgent(Agent):
         return Goal(float(body[0]), float(body[1]), float(body[2]), heading)
 
     def _over_set(self, set_id: str, altitude: float, shift: tuple[float, float] = (0.0, 0.0)) -> Goal:
-        """Hover over a set's centroid (as currently placed) at `altitude` above its top, the image's long side
-        (camera x) along the object's x-axis (seed 002 §3.3: the vehicle aligned with the object)."""
+        """Hover over a set's centroid (as currently placed) at `altitude` above its top, aligned with the object
+        (seed 002 §3.3): the image's long side (camera x) along the object's axis on which the set is longer."""
         pts = transform_points(self.T_wo, self.sets[set_id])
         centre = pts.mean(axis=0)
         camera = np.array([centre[0] + shift[0], centre[1] + shift[1], float(pts[:, 2].min()) - altitude])
-        return self._camera_goal(camera, (self._object_heading() - 90.0) % 360.0)
+        extent = np.ptp(self.sets[set_id][:, :2], axis=0)
+        along_x = extent[0] >= extent[1]
+        return self._camera_goal(camera, (self._object_heading() - (90.0 if along_x else 0.0)) % 360.0)
+
+    def _fine_altitude(self, set_id: str) -> float:
+        """How high above a set's top its fine views are taken: no lower than `FINE_ALTITUDE_M`, high enough
+        that the whole set fits in `VIEW_FILL` of the image (a set cut by the image's edge is not recognised),
+        and low enough that its deepest point stays inside the stereo range."""
+        pts = self.sets[set_id]
+        extent = np.sort(np.ptp(pts[:, :2], axis=0))[::-1]  # long side along the image's width
+        fit = max(extent[0] / (VIEW_FILL * self.field[0]), extent[1] / (VIEW_FILL * self.field[1]))
+        ceiling = self.max_range - float(np.ptp(pts[:, 2])) - RANGE_MARGIN_M
+        return float(min(max(FINE_ALTITUDE_M, fit), ceiling))
+
+    def _search_altitude(self, set_id: str) -> float:
+        """Searching, a little above the fine view: a wider field for the larger position uncertainty."""
+        pts = self.sets[set_id]
+        ceiling = self.max_range - float(np.ptp(pts[:, 2])) - RANGE_MARGIN_M - SEARCH_RAISE_M
+        return float(min(max(SEARCH_ALTITUDE_M, self._fine_altitude(set_id) + SEARCH_RAISE_M), ceiling))
 
     def _clearance_depth(self) -> float:
         """Moving across the object, stay this shallow: its highest known point plus the minimum altitude and a
@@ -340,13 +363,13 @@ class InspectAgent(Agent):
         # around each set as currently placed, every other ring a little higher (recognition is sensitive to
         # the range, and the database may be off in depth too).
         order = sorted(self.sets, key=lambda s: (-len(self.sets[s]), -float(np.ptp(self.sets[s][:, 2])), s))
-        self.search_goals[:] = [self._over_set(s, SEARCH_ALTITUDE_M + SEARCH_RAISE_M * (ring % 2), o)
+        self.search_goals[:] = [self._over_set(s, self._search_altitude(s) + SEARCH_RAISE_M * (ring % 2), o)
                                 for ring, o in enumerate(offsets) for s in order]
 
     def _begin_fine(self, set_id: str) -> None:
         self.set_id, self.stage = set_id, "fine"
         self.views, self.fine_tries = [], 0
-        self.goals, self.goal_index, self.phase = [self._over_set(set_id, FINE_ALTITUDE_M)], 0, "go"
+        self.goals, self.goal_index, self.phase = [self._over_set(set_id, self._fine_altitude(set_id))], 0, "go"
 
     def _set_failed(self, nav: NavState, reason: str) -> None:
         self.T_wo = self.T_wo_trusted.copy()  # what an unconfirmed search result suggested is dropped
@@ -426,7 +449,7 @@ class InspectAgent(Agent):
             return
         shift = FINE_SHIFT_M * (1 if len(self.views) % 2 else -1)
         x_axis = self.T_wo[:3, 0]
-        self.goals = [self._over_set(self.set_id, FINE_ALTITUDE_M,
+        self.goals = [self._over_set(self.set_id, self._fine_altitude(self.set_id),
                                      (shift * float(x_axis[0]), shift * float(x_axis[1])))]
         self.goal_index, self.phase = 0, "go"
 
@@ -435,7 +458,8 @@ class InspectAgent(Agent):
             self._odometry(frame, nav)  # the frame still carries the odometry chain
         if self.stage == "fine":
             self.fine_tries += 1
-            if self.fine_tries <= (2 * FINE_VIEWS if self.fixed else CONFIRM_TRIES):
+            # a hit that a closer view has confirmed keeps the longer budget of a placed object
+            if self.fine_tries <= (2 * FINE_VIEWS if self.fixed or self.views else CONFIRM_TRIES):
                 self.phase = "go"
             elif self.fixed and ("set", self.set_id) in self.done:
                 # Recognised here before: this re-referencing did not work, the set is still good. Go on by
