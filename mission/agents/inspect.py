@@ -68,6 +68,18 @@ def database_pose(obj: KnownObject) -> np.ndarray:
     return pose_matrix(obj.pose.north, obj.pose.east, obj.pose.depth, obj.pose.heading)
 
 
+def fit_altitude(points: np.ndarray, field: tuple[float, float], fill: float = VIEW_FILL) -> float:
+    """The range from a down-looking camera at which a point set (object frame, z down) fits in `fill` of the
+    image, its longer horizontal side along the image's width; `field` is the image's (width, height) at unit
+    range. Seed 002's fine views need the whole set: a set cut by the image's edge is not recognised.
+
+    >>> round(fit_altitude(np.array([[0, 0, 0], [5, 0, 0], [5, 1.5, 0]]), (1.2, 0.9)), 3)  # 5 m / (0.75 · 1.2)
+    5.556
+    """
+    extent = np.sort(np.ptp(np.asarray(points, dtype=float)[:, :2], axis=0))[::-1]
+    return float(max(extent[0] / (fill * field[0]), extent[1] / (fill * field[1])))
+
+
 def expanding_square(step: float, count: int) -> list[tuple[float, float]]:
     """North/east offsets of an expanding-square search: legs of 1, 1, 2, 2, 3, … steps turning clockwise.
 
@@ -233,14 +245,11 @@ class InspectAgent(Agent):
         return self._camera_goal(camera, (self._object_heading() - (90.0 if along_x else 0.0)) % 360.0)
 
     def _fine_altitude(self, set_id: str) -> float:
-        """How high above a set's top its fine views are taken: no lower than `FINE_ALTITUDE_M`, high enough
-        that the whole set fits in `VIEW_FILL` of the image (a set cut by the image's edge is not recognised),
-        and low enough that its deepest point stays inside the stereo range."""
+        """How high above a set's top its fine views are taken: the whole set in view (`fit_altitude`), no
+        lower than `FINE_ALTITUDE_M`, and its deepest point inside the stereo range."""
         pts = self.sets[set_id]
-        extent = np.sort(np.ptp(pts[:, :2], axis=0))[::-1]  # long side along the image's width
-        fit = max(extent[0] / (VIEW_FILL * self.field[0]), extent[1] / (VIEW_FILL * self.field[1]))
-        ceiling = self.max_range - float(np.ptp(pts[:, 2])) - RANGE_MARGIN_M
-        return float(min(max(FINE_ALTITUDE_M, fit), ceiling))
+        return min(max(FINE_ALTITUDE_M, fit_altitude(pts, self.field)),
+                   self.max_range - float(np.ptp(pts[:, 2])) - RANGE_MARGIN_M)
 
     def _search_altitude(self, set_id: str) -> float:
         """Searching, a little above the fine view: a wider field for the larger position uncertainty."""
