@@ -22,9 +22,13 @@ def _validate(args: argparse.Namespace) -> int:
         _, diags = validate_mission_file(path)
         for d in diags:
             print(d)
-        if diags:
+        errors = sum(1 for d in diags if not d.warning)
+        warnings = len(diags) - errors
+        if errors:
             status = 1
-            print(f"{path}: {len(diags)} problem(s)", file=sys.stderr)
+            print(f"{path}: {errors} problem(s)" + (f", {warnings} warning(s)" if warnings else ""), file=sys.stderr)
+        elif warnings:
+            print(f"{path}: ok, {warnings} warning(s)")
         elif not args.quiet:
             print(f"{path}: ok")
     return status
@@ -42,10 +46,14 @@ def _schema(args: argparse.Namespace) -> int:
 
 
 def _simulate(args: argparse.Namespace) -> int:
-    from mission.language import load_mission
+    from mission.language import validate_mission_file
     from mission.sim.run import check_supported, simulate
 
-    mission = load_mission(args.mission)
+    mission, diags = validate_mission_file(args.mission)
+    if mission is None:
+        raise MissionError([d for d in diags if not d.warning])
+    for d in diags:  # warnings: legal, but probably not meant
+        print(d, file=sys.stderr)
     check_supported(mission)
     if args.seeds is not None:
         return _campaign(args, mission.name)

@@ -14,15 +14,17 @@ class AuvError(Exception):
 
 @dataclass(frozen=True)
 class Diagnostic:
-    """One located problem in a mission or world file (1-based line and column)."""
+    """One located problem in a mission or world file (1-based line and column). A `warning` is legal but
+    probably not what the designer meant (a leg that will trip a safety monitor): reported, not refused."""
 
     file: str
     line: int
     col: int
     message: str
+    warning: bool = False
 
     def __str__(self) -> str:
-        return f"{self.file}:{self.line}:{self.col}: {self.message}"
+        return f"{self.file}:{self.line}:{self.col}: {'warning: ' if self.warning else ''}{self.message}"
 
 
 class MissionError(AuvError):

@@ -57,3 +57,33 @@ def test_schema_accepts_the_reference_mission_and_rejects_unknown_keys():
     data["vehicle"]["cruse_speed"] = 1.0
     with pytest.raises(jsonschema.ValidationError):
         jsonschema.validate(data, schema)
+
+
+def test_a_leg_across_the_notch_of_a_non_convex_geofence_is_a_located_warning(tmp_path, capsys):
+    from mission.cli import main
+    from mission.language import load_mission
+
+    path = tmp_path / "notch.yaml"
+    path.write_text("""name: notch
+sensors:
+  usbl: {sigma: 1.5}
+safety:
+  geofence: [[-60, -60], [-60, 460], [100, 460], [100, 150], [360, 150], [360, -60]]
+route:
+  - id: out
+    transit: {to: {north: 50, east: 400}, depth: 20}
+  - id: across
+    transit: {to: {north: 300, east: 100}, depth: 20}
+  - id: back
+    transit: {to: home}
+""", encoding="utf-8")
+    mission, diags = validate_mission_file(path)
+    assert mission is not None  # legal: the executive would abort at the fence
+    assert [(d.line, d.col, d.warning) for d in diags] == [(10, 19, True)]
+    assert "leg of 'across' from (50, 400) to (300, 100) crosses outside the geofence" in diags[0].message
+    assert load_mission(path).route[1].id == "across"
+    assert main(["validate", str(path)]) == 0
+    assert "warning: the leg of 'across'" in capsys.readouterr().out
+    # the leg home from (300, 100) stays inside; a convex fence never warns
+    path.write_text(path.read_text().replace("[100, 460], [100, 150], [360, 150], ", "[360, 460], "))
+    assert validate_mission_file(path)[1] == []

@@ -25,7 +25,9 @@ def test_there_are_missions():
 @pytest.mark.parametrize("path", ALL, ids=[p.name for p in ALL])
 def test_mission_validates_and_simulates(path, tmp_path):
     mission, diags = validate_mission_file(path)
-    assert diags == []
+    assert [str(d) for d in diags if not d.warning] == []
+    # the abort mission's leg is meant to cross the notch of its fence, and validation says so
+    assert [d.warning for d in diags] == ([True] if path.name in EXPECTED_ABORT else [])
     assert mission is not None
     try:
         check_supported(mission)

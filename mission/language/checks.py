@@ -6,12 +6,14 @@ Every check reports and goes on, so that the designer sees every mistake at once
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
+from shapely.geometry import LineString as ShapelyLine
 from shapely.geometry import Point as ShapelyPoint
 from shapely.geometry import Polygon as ShapelyPolygon
 from shapely.validation import explain_validity
@@ -200,6 +202,33 @@ def _check_envelope(doc: Located, parts: Parts) -> list[Diagnostic]:
             if area is not None and fence is not None and not fence.covers(area):
                 out.append(doc.diagnostic(base + ("area",), f"the survey area of '{element.id}' extends outside "
                                                             "the geofence"))
+    if fence is not None:
+        out += _legs_outside(doc, parts, fence)
+    return out
+
+
+def _legs_outside(doc: Located, parts: Parts, fence: ShapelyPolygon) -> list[Diagnostic]:
+    """Straight transit legs between points the mission fixes (home, then each transit's point; a survey,
+    exploration or inspection ends where the route does not say) that leave a non-convex geofence although both
+    ends lie inside it."""
+    out: list[Diagnostic] = []
+    home = (parts.home.north, parts.home.east) if parts.home is not None else None
+    here = home
+    for i, element in parts.route:
+        p = element.params
+        if not isinstance(p, Transit):
+            here = None
+            continue
+        goal = home if isinstance(p.to, str) else (p.to.north, p.to.east)
+        if here is not None and goal is not None and here != goal:
+            a, b = ShapelyPoint(here[1], here[0]), ShapelyPoint(goal[1], goal[0])
+            if fence.covers(a) and fence.covers(b) and not fence.covers(ShapelyLine([a, b])):
+                d = doc.diagnostic(("route", i, "transit", "to"),
+                                   f"the leg of '{element.id}' from ({here[0]:g}, {here[1]:g}) to "
+                                   f"({goal[0]:g}, {goal[1]:g}) crosses outside the geofence: the vehicle will "
+                                   "abort there")
+                out.append(dataclasses.replace(d, warning=True))
+        here = goal
     return out
 
 

@@ -196,14 +196,16 @@ def validate_mission_file(path: str | Path, environment: bool = True) -> tuple[M
             for i, o in enumerate(mission.objects)]})
     if mission is not None:
         mission._source = str(path)
-    return (mission if not diags else None), sorted(set(diags), key=lambda d: (d.file, d.line, d.col, d.message))
+    errors = [d for d in diags if not d.warning]
+    return (mission if not errors else None), sorted(set(diags), key=lambda d: (d.file, d.line, d.col, d.message))
 
 
 def load_mission(path: str | Path, environment: bool = True) -> Mission:
-    """Load a mission, raising MissionError with every problem if it is not valid."""
+    """Load a mission, raising MissionError with every problem if it is not valid (warnings alone do not stop
+    it: `validate_mission_file` reports them)."""
     mission, diags = validate_mission_file(path, environment)
-    if diags or mission is None:
-        raise MissionError(diags)
+    if mission is None:
+        raise MissionError([d for d in diags if not d.warning])
     return mission
 
 
