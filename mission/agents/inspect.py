@@ -36,6 +36,8 @@ from planners.ordering import Stop
 FINE_ALTITUDE_M = 3.6  # above a set's top for the precise referencing (seed 000's experiments), at the least
 SEARCH_ALTITUDE_M = 5.0  # above a set's top while searching: a wide view, at the least
 VIEW_FILL = 0.75  # a set spans at most this share of the image's width and height in its fine view
+FINE_STEPS_M = (0.0, 0.4, 0.8)  # successive fine views cycle through these heights above the fine altitude:
+# single-view recognition depends sharply on the range (which corners stand out of the seabed's texture)
 RANGE_MARGIN_M = 0.5  # the set's deepest point stays this far inside the stereo range
 SEARCH_STEP_M = 1.5  # expanding-square leg unit: well inside the footprint at the search altitude
 SEARCH_POSITIONS = 9  # pattern positions around each set
@@ -247,15 +249,16 @@ class InspectAgent(Agent):
     def _fine_altitude(self, set_id: str) -> float:
         """How high above a set's top its fine views are taken: the whole set in view (`fit_altitude`), no
         lower than `FINE_ALTITUDE_M`, and its deepest point inside the stereo range."""
-        pts = self.sets[set_id]
-        return min(max(FINE_ALTITUDE_M, fit_altitude(pts, self.field)),
-                   self.max_range - float(np.ptp(pts[:, 2])) - RANGE_MARGIN_M)
+        return min(max(FINE_ALTITUDE_M, fit_altitude(self.sets[set_id], self.field)), self._range_ceiling(set_id))
+
+    def _range_ceiling(self, set_id: str) -> float:
+        """The highest view above a set's top that keeps its deepest point inside the stereo range."""
+        return self.max_range - float(np.ptp(self.sets[set_id][:, 2])) - RANGE_MARGIN_M
 
     def _search_altitude(self, set_id: str) -> float:
         """Searching, a little above the fine view: a wider field for the larger position uncertainty."""
-        pts = self.sets[set_id]
-        ceiling = self.max_range - float(np.ptp(pts[:, 2])) - RANGE_MARGIN_M - SEARCH_RAISE_M
-        return float(min(max(SEARCH_ALTITUDE_M, self._fine_altitude(set_id) + SEARCH_RAISE_M), ceiling))
+        return float(min(max(SEARCH_ALTITUDE_M, self._fine_altitude(set_id) + SEARCH_RAISE_M),
+                         self._range_ceiling(set_id) - SEARCH_RAISE_M))
 
     def _clearance_depth(self) -> float:
         """Moving across the object, stay this shallow: its highest known point plus the minimum altitude and a
@@ -378,7 +381,17 @@ class InspectAgent(Agent):
     def _begin_fine(self, set_id: str) -> None:
         self.set_id, self.stage = set_id, "fine"
         self.views, self.fine_tries = [], 0
-        self.goals, self.goal_index, self.phase = [self._over_set(set_id, self._fine_altitude(set_id))], 0, "go"
+        self.goals, self.goal_index, self.phase = [self._fine_goal()], 0, "go"
+
+    def _fine_goal(self) -> Goal:
+        """The next fine view over the current set: its height cycles through `FINE_STEPS_M`, and it moves
+        `FINE_SHIFT_M` back and forth along the object's x-axis (fresh image noise and corners each time)."""
+        k = len(self.views) + self.fine_tries
+        shift = FINE_SHIFT_M * (1 if k % 2 else -1) if k else 0.0
+        x_axis = self.T_wo[:3, 0]
+        altitude = min(self._fine_altitude(self.set_id) + FINE_STEPS_M[k % len(FINE_STEPS_M)],
+                       self._range_ceiling(self.set_id))
+        return self._over_set(self.set_id, altitude, (shift * float(x_axis[0]), shift * float(x_axis[1])))
 
     def _set_failed(self, nav: NavState, reason: str) -> None:
         self.T_wo = self.T_wo_trusted.copy()  # what an unconfirmed search result suggested is dropped
@@ -449,18 +462,19 @@ class InspectAgent(Agent):
                 self._resume_search(nav)
             return
         if fused is not None and len(self.views) >= FINE_VIEWS:
-            self.fixed = True
-            self.T_wo_trusted = self.T_wo.copy()
-            self.done.append(("set", self.set_id))
-            self.context.emit("referenced", nav.time, element=self.context.element.id, set=self.set_id,
-                              views=fused[1], points=fused[3], residual_m=round(fused[2], 4))
-            self._next(nav)
+            self._referenced(nav, fused)
             return
-        shift = FINE_SHIFT_M * (1 if len(self.views) % 2 else -1)
-        x_axis = self.T_wo[:3, 0]
-        self.goals = [self._over_set(self.set_id, self._fine_altitude(self.set_id),
-                                     (shift * float(x_axis[0]), shift * float(x_axis[1])))]
-        self.goal_index, self.phase = 0, "go"
+        self.goals, self.goal_index, self.phase = [self._fine_goal()], 0, "go"
+
+    def _referenced(self, nav: NavState, fused: tuple[np.ndarray, int, float, int]) -> None:
+        """The fused views fix the object: trust it, count the set as visited and go on."""
+        self.T_wo = fused[0]
+        self.fixed = True
+        self.T_wo_trusted = self.T_wo.copy()
+        self.done.append(("set", self.set_id))
+        self.context.emit("referenced", nav.time, element=self.context.element.id, set=self.set_id,
+                          views=fused[1], points=fused[3], residual_m=round(fused[2], 4))
+        self._next(nav)
 
     def _not_recognised(self, frame: Any, nav: NavState) -> None:
         if self.T_object_origin is not None:
@@ -468,8 +482,11 @@ class InspectAgent(Agent):
         if self.stage == "fine":
             self.fine_tries += 1
             # a hit that a closer view has confirmed keeps the longer budget of a placed object
+            fused = fuse_views(self.views) if len(self.views) >= 2 else None
             if self.fine_tries <= (2 * FINE_VIEWS if self.fixed or self.views else CONFIRM_TRIES):
-                self.phase = "go"
+                self.goals, self.goal_index, self.phase = [self._fine_goal()], 0, "go"
+            elif fused is not None:  # fewer views than wished, but they agree: a fix all the same
+                self._referenced(nav, fused)
             elif self.fixed and ("set", self.set_id) in self.done:
                 # Recognised here before: this re-referencing did not work, the set is still good. Go on by
                 # odometry (its chain continues) rather than give the set up.
