@@ -7,7 +7,10 @@
    (`perception_plugins.referencing.reference`), ambiguities settled by the prior.
 3. The least-squares transform of the identified points gives T_cam_object. A result that puts the object far
    from where the prior (database pose + navigation) says is refused as implausible: outliers can fake
-   consistent sets, and the database is "off by metres", not by tens of metres.
+   consistent sets, and the database is "off by metres", not by tens of metres. So is one that tilts the
+   object's vertical axis away from the prior's by more than `gate_tilt_deg`: structures rest on the seabed
+   (the database's z is the world's, seed 000 §3.1), and a wrong correspondence of a flat set fits by tilting it
+   (a skid's four points matched 17° tilted, three views agreeing, would fly the vehicle into the module).
 
 The consistency tolerance grows with range like the stereo depth error (σ_Z ∝ Z²).
 """
@@ -40,6 +43,7 @@ class StereoReferencingPlugin:
         self.max_features = 600
         self.gate_m = 5.0
         self.gate_deg = 25.0
+        self.gate_tilt_deg = 6.0
 
     def configure(self, settings: Mapping[str, Any]) -> None:
         stereo = (settings.get("sensors") or {}).get("stereo") or {}
@@ -48,6 +52,7 @@ class StereoReferencingPlugin:
         self.max_features = int(own.get("max_features", self.max_features))
         self.gate_m = float(own.get("gate_m", self.gate_m))
         self.gate_deg = float(own.get("gate_deg", self.gate_deg))
+        self.gate_tilt_deg = float(own.get("gate_tilt_deg", self.gate_tilt_deg))
 
     def reset(self) -> None:
         return None
@@ -87,8 +92,12 @@ class StereoReferencingPlugin:
                 shift = float(np.max(np.linalg.norm(
                     (model.points @ T[:3, :3].T + T[:3, 3]) - (model.points @ prior[:3, :3].T + prior[:3, 3]), axis=1)))
                 turn = _rotation_deg(T[:3, :3].T @ prior[:3, :3])
+                tilt = math.degrees(math.acos(min(1.0, max(-1.0, float(T[:3, 2] @ prior[:3, 2])))))
                 if shift > self.gate_m or turn > self.gate_deg:
                     refused.append(f"{model.set_id}: {shift:.1f} m / {turn:.0f} deg from the prior")
+                    continue
+                if tilt > self.gate_tilt_deg:
+                    refused.append(f"{model.set_id}: tilted {tilt:.0f} deg from the prior's vertical")
                     continue
             model_idx = [i for i, _ in found.pairs]
             cloud_idx = [j for _, j in found.pairs]

@@ -367,3 +367,33 @@ def test_referencing_stays_within_its_time_budget_when_the_object_is_absent():
     result = reference(model, cloud, tolerance=0.05, budget_s=0.5)
     assert time.perf_counter() - t0 < 2.5
     assert not result.exact                                                 # it said it stopped early
+
+
+@pytest.mark.parametrize(("tilt_deg", "recognised"), [(2.0, True), (15.0, False)])
+def test_the_plugin_refuses_a_fix_that_tilts_the_object_off_the_vertical(monkeypatch, tilt_deg, recognised):
+    """A flat set can fit wrong correspondences by tilting; objects rest on the seabed, so a fix whose vertical
+    axis leaves the prior's by more than the tilt gate (6°) is implausible, whatever its residual."""
+    from types import SimpleNamespace
+
+    from mission.plugin_api import PointSetModel, ReferencingRequest, StereoImages
+    from perception_plugins.referencing import plugin as plugin_module
+
+    model = np.array([[0.0, 0, 0], [0, 5, 0], [1, 1.2, -0.3], [1.2, 4, -0.35], [0.5, 2.5, -0.2]])
+    prior = np.eye(4)
+    prior[:3, 3] = (-0.5, -2.5, 6.0)  # the set 6 m in front of a down-looking camera
+    t = np.radians(tilt_deg)
+    tilt = np.array([[np.cos(t), 0, np.sin(t)], [0, 1, 0], [-np.sin(t), 0, np.cos(t)]])
+    T_true = prior.copy()
+    T_true[:3, :3] = tilt
+    cloud = model @ T_true[:3, :3].T + T_true[:3, 3]
+    monkeypatch.setattr(plugin_module, "stereo_cloud", lambda *a, **k: SimpleNamespace(points_cam=cloud))
+    plugin = plugin_module.StereoReferencingPlugin()
+    plugin.configure({})
+    blank = np.zeros((90, 120), np.uint8)
+    frame = StereoImages(0.0, blank, blank, np.array([[100.0, 0, 60], [0, 100, 45], [0, 0, 1]]), 0.25)
+    result = plugin.process(frame, ReferencingRequest((PointSetModel("m", "skid", model),), prior, 0.05, 0.4))
+    assert result.recognised is recognised
+    if recognised:
+        np.testing.assert_allclose(result.T_cam_object, T_true, atol=1e-6)
+    else:
+        assert "tilted 15 deg" in result.details["reason"]
