@@ -3,8 +3,9 @@
 Survey lines stop a standoff short of a zone, to leave room for the turn, and meet its slanted sides in steps;
 the strip they leave is covered by passes that follow the zone at the standoff, on a ring whose corners the
 vehicle can fly (the zone grown by the standoff, its concave corners rounded to the turning radius). Only the
-stretches of ring next to uncovered free area are flown, the most useful first, until what stays uncovered is
-within the tolerance.
+stretches of ring whose swath reaches uncovered free area are flown (a segment is needed if its own swath, square
+at the ends as the coverage is counted, covers some of it; short gaps between needed segments are flown through),
+the most useful first, until what stays uncovered is within the tolerance.
 """
 
 from __future__ import annotations
@@ -39,7 +40,12 @@ def contour_rings(scene: Scene, spacing: float) -> list[Array]:
 
 
 def _stretches(need: NDArray[np.bool_], ring: Array, bridge: float) -> list[Array]:
-    """Stretches of a closed ring around the points that need it; gaps shorter than `bridge` are flown too."""
+    """Stretches of a closed ring through the points that need it; gaps shorter than `bridge` are flown too.
+
+    >>> square = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0], [0.0, 0.0]])
+    >>> [a.tolist() for a in _stretches(np.array([True, True, False, False]), square, bridge=5.0)]
+    [[[0.0, 0.0], [10.0, 0.0]]]
+    """
     pts = ring[:-1]
     n = len(pts)
     if not need.any():
@@ -71,14 +77,27 @@ def _stretches(need: NDArray[np.bool_], ring: Array, bridge: float) -> list[Arra
     for i, (start, run, _) in enumerate(gaps):
         first = (start + run) % n                                # first needed point after this gap
         end_start = gaps[(i + 1) % len(gaps)][0]                 # first free point of the next gap
-        idx = [(first - 1) % n]                                  # one point of margin on each side
-        j = first
+        idx = [first]
+        j = (first + 1) % n
         while j != end_start:
             idx.append(j)
             j = (j + 1) % n
-        idx.append(end_start)
         out.append(pts[idx])
     return out
+
+
+def _needed(ring: Array, residual: BaseGeometry, swath: float) -> NDArray[np.bool_]:
+    """Which points of a closed ring a pass must fly through: the ends of the segments whose swath (square at the
+    ends, as `metrics.swept` counts it) covers more than a sliver of `residual`."""
+    segs = shapely.linestrings(np.stack([ring[:-1], ring[1:]], axis=1))
+    strips = shapely.buffer(segs, swath / 2.0, cap_style="flat")
+    parts = shapely.get_parts(residual)
+    strip_idx, part_idx = shapely.STRtree(parts).query(strips, predicate="intersects")
+    area = np.zeros(len(strips))
+    if len(strip_idx):
+        np.add.at(area, strip_idx, shapely.area(shapely.intersection(strips[strip_idx], parts[part_idx])))
+    hit = area > 1e-3 * swath                              # more than a strip a millimetre wide across the swath
+    return hit | np.roll(hit, 1)                           # point k ends segment k - 1 and starts segment k
 
 
 def contour_runs(scene: Scene, residual: BaseGeometry, spacing: float, tolerance: float) -> list[Run]:
@@ -89,11 +108,10 @@ def contour_runs(scene: Scene, residual: BaseGeometry, spacing: float, tolerance
     budget = tolerance * scene.free.area
     if residual.area <= budget:
         return []
-    reach = 0.45 * scene.swath
     arcs: list[Array] = []
     covers: list[BaseGeometry] = []
     for ring in contour_rings(scene, spacing):
-        need = np.asarray(shapely.distance(shapely.points(ring[:-1]), residual) <= reach)
+        need = _needed(ring, residual, scene.swath)
         for arc in _stretches(need, ring, bridge=max(2.0 * scene.standoff, spacing)):
             if len(arc) < 2:
                 continue

@@ -33,7 +33,9 @@ Array = NDArray[np.float64]
 Option = tuple[float, Sweep, list[Run], int, str, bool]
 SHORTLIST = 2
 FULL_PLANS = 2         # line directions ordered in full
+SMALL_AREA = 0.5e6     # m²: areas this small plan quickly, and try twice as many line directions
 HEADLAND_PLANS = 1     # of which also planned in the headland layout (more gained nothing measurable)
+SLIVER, FINE_SLIVER = 1e-3, 1e-5   # parts of a band (in spacing²) a cut line may give up
 INSET = 0.9            # share of the swath's overlap reach by which the outermost lines stand in
 
 
@@ -73,10 +75,11 @@ def meander(
     `heading="auto"` tries the directions of the boundary edges and a 2° grid, scores them in closed form by
     number of lines (turns) and then length, and plans the best two and the single-direction sweep's heading up to
     their cells and contour passes; the two shortest of those are cut back and ordered in full (the best also in
-    the headland layout). The best single-direction boustrophedon (`baseline_boustrophedon`) is planned too: the
-    shortest cell plan no longer than it is returned; if there is none, that sweep with its lines cut back the
-    same way ("single-direction-cut") if it is shorter, else the single-direction plan itself (`method` tells
-    which).
+    the headland layout). Areas up to 0.5 km², quick to plan, get twice as many directions at both stages. The
+    best single-direction boustrophedon (`baseline_boustrophedon`) is planned too: every cell plan whose estimate
+    is within 2 % of it is flown in full, and the shortest no longer than it is returned; if there is none, that
+    sweep with its lines cut back the same way ("single-direction-cut", coarser cuts first) if it is shorter, else
+    the single-direction plan itself (`method` tells which).
 
     >>> plan = meander([[0, 0], [0, 400], [100, 400], [100, 0]], spacing=25.0, turn_radius=5.0)
     >>> plan.heading_deg, len(plan.lines), plan.turns, plan.cells
@@ -96,7 +99,7 @@ def meander(
                                edge_headings(scene.zones, spacing / 2.0))
         lines, length, gaps = row_statistics(scene.region, cands, spacing)
         score = sweep_score(lines, length, gaps, u_turn_length(spacing, scene.radius))
-        heads = merge_headings(shortlist(cands, (score, lines), SHORTLIST), [base_sweep.heading_deg])
+        heads = merge_headings(shortlist(cands, (score, lines), SHORTLIST * _scale(scene)), [base_sweep.heading_deg])
     else:
         h = float(heading) % 180.0
         base_sweep = sweeps.get(h)
@@ -109,7 +112,7 @@ def meander(
     inset = max(0.0, INSET * 0.5 * (scene.swath - spacing))
     ours = SweepCache(scene.region, scene.forbidden, spacing, inset)
     drafts = sorted((cell_tasks(scene, ours.get(float(h)), fill_tolerance) for h in heads
-                     if ours.get(float(h)).pieces), key=lambda t: t.rough_length())[:FULL_PLANS]
+                     if ours.get(float(h)).pieces), key=lambda t: t.rough_length())[:FULL_PLANS * _scale(scene)]
     layouts = [(draft, False) for draft in drafts]
     rings = headland_tasks(scene)
     if rings and drafts:
@@ -131,25 +134,36 @@ def meander(
         return max(fill_tolerance * scene.free.area, uncovered_area(scene, base_runs)) + 1e-6
 
     plan = _shortest(scene, options, base, allowed)
-    for neighbours in (True, False):
+    for neighbours, sliver in ((True, SLIVER), (False, SLIVER), (True, FINE_SLIVER), (False, FINE_SLIVER)):
         if plan is not None:
             break
-        # no cell plan beats the single-direction sweep: that sweep with its lines cut back
-        rows = trimmed_rows(scene, base_sweep, base_runs, fill_tolerance, s_xy, neighbours)
+        # no cell plan beats the single-direction sweep: that sweep with its lines cut back (the finer cuts keep
+        # the small parts of the bands, at the corners of the contour passes, that the coarser ones give up)
+        rows = trimmed_rows(scene, base_sweep, base_runs, fill_tolerance, s_xy, neighbours, sliver)
         if rows is not None:
             plan = _shortest(scene, [(estimated_length(scene, rows), base_sweep, rows, 1, "single-direction-cut",
                                       True)], base, allowed)
     return base if plan is None else plan
 
 
+def _scale(scene: Scene) -> int:
+    """How many times the usual number of line directions to try: twice over small areas."""
+    return 2 if scene.area.area <= SMALL_AREA else 1
+
+
 def _shortest(scene: Scene, options: list[Option], base: CoveragePlan,
               allowed: Callable[[], float]) -> CoveragePlan | None:
     """The shortest option flown in full that is no longer than `base` (and, where it is to be checked, leaves at
-    most `allowed()` m² of the free area uncovered), trying them by estimated length."""
+    most `allowed()` m² of the free area uncovered). Estimates only screen the options: every one within 2 % of
+    `base` and below the shortest flown so far is flown in full, since the transits as built may differ from
+    their estimates either way."""
+    best: CoveragePlan | None = None
     for estimate, sweep, runs, n_cells, method, check in sorted(options, key=lambda o: o[0]):
-        if estimate > base.length_m * 1.02 or (check and uncovered_area(scene, runs) > allowed()):
+        if estimate > base.length_m * 1.02 or (best is not None and estimate >= best.length_m):
+            continue
+        if check and uncovered_area(scene, runs) > allowed():
             continue
         plan = assemble(scene, runs, sweep.heading_deg, sweep.spacing, n_cells, method)
-        if plan.length_m <= base.length_m + 1e-6:
-            return plan
-    return None
+        if plan.length_m <= base.length_m + 1e-6 and (best is None or plan.length_m < best.length_m):
+            best = plan
+    return best

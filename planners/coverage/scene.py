@@ -96,8 +96,9 @@ class Scene:
     def transit(self, p: Array, angle_p: float, q: Array, angle_q: float) -> Array:
         """A flyable path from pose (p, angle_p) to pose (q, angle_q) that keeps out of the zones.
 
-        The Dubins path when it is clear; otherwise the shortest route around the zones, its corners joined by
-        Dubins pieces (a piece that would touch a zone falls back to its straight chord, which is clear).
+        The Dubins path when it is clear; otherwise the shortest route around the zones, flown from corner to corner
+        by Dubins pieces, each reaching the farthest corner it can without touching a zone (where none clears,
+        the straight chord to the next corner, which is clear).
         """
         path = dubins_path(p, angle_p, q, angle_q, self.radius)
         if not self.has_zones or bool(self.valid([path])[0]):
@@ -110,12 +111,15 @@ class Scene:
             d = route[k + 1] - route[k - 1]
             angles.append(math.atan2(d[1], d[0]))
         angles.append(angle_q)
-        pieces = [dubins_path(route[k], angles[k], route[k + 1], angles[k + 1], self.radius)
-                  for k in range(len(route) - 1)]
-        ok = self.valid(pieces)
         out = [route[:1]]
-        for k, piece in enumerate(pieces):
-            out.append(piece[1:] if ok[k] else route[k + 1 : k + 2])
+        i = 0
+        while i < len(route) - 1:                  # from each corner, the farthest one a clear Dubins path reaches
+            later = list(range(len(route) - 1, i, -1))
+            pieces = [dubins_path(route[i], angles[i], route[j], angles[j], self.radius) for j in later]
+            ok = self.valid(pieces)
+            k = int(np.argmax(ok)) if ok.any() else len(later) - 1
+            out.append(pieces[k][1:] if ok[k] else route[later[k] : later[k] + 1])
+            i = later[k]
         return np.concatenate(out)
 
     def transit_costs(self, p: Array, angle_p: Array, q: Array, angle_q: Array) -> Array:

@@ -143,17 +143,18 @@ def trimmed(scene: Scene, plan: Tasks, tolerance: float) -> Tasks:
 
 
 def trimmed_rows(scene: Scene, sweep: Sweep, runs: Sequence[Run], tolerance: float, start: Array | None = None,
-                 neighbours: bool = True) -> list[Run] | None:
+                 neighbours: bool = True, sliver: float = 1e-3) -> list[Run] | None:
     """The single-direction sweep `runs` (rows in order, see `single_direction_runs`) with the lines cut back to
-    what its contour passes (and with `neighbours`, the neighbouring lines) leave uncovered: the runs in flying
-    order, contour passes inserted; None if no line can be cut."""
+    what its contour passes (and with `neighbours`, the neighbouring lines) leave uncovered, ignoring parts of a
+    band smaller than `sliver`·spacing²: the runs in flying order, contour passes inserted; None if no line can be
+    cut."""
     passes = [seg for run in runs if run.turns == 0 and len(run.path) > 2 for seg in run.lines]
     try:
         covered = swept(passes, scene.swath) if passes else None
         need = scene.free if covered is None else scene.free.difference(covered)
-        cut = sweep if covered is None else trim_to_need(sweep, need, covered)
+        cut = sweep if covered is None else trim_to_need(sweep, need, covered, sliver)
         if neighbours:
-            cut = trim_to_neighbours(cut, need, scene.swath)
+            cut = trim_to_neighbours(cut, need, scene.swath, sliver)
     except shapely.errors.GEOSException:
         return None
     if cut.pieces == sweep.pieces or not cut.pieces:

@@ -143,7 +143,12 @@ def dubins_path(p0: ArrayLike, theta0: float, p1: ArrayLike, theta1: float, radi
     """
     a = np.asarray(p0, dtype=float).reshape(1, 2)
     b = np.asarray(p1, dtype=float).reshape(1, 2)
+    turn = (theta1 - theta0) % (2.0 * math.pi)
+    if np.linalg.norm(b - a) < 1e-9 and min(turn, 2.0 * math.pi - turn) < 1e-9:    # the poses coincide
+        return np.concatenate([a, b])
     _, word, params = dubins(a, [theta0], b, [theta1], radius)
     pts = dubins_points(p0, theta0, int(word[0]), params[0], radius)
+    if len(pts) < 2:
+        return np.concatenate([a, b])
     pts[-1] = np.asarray(p1, dtype=float)        # remove the rounding of the last arc
     return pts
