@@ -52,6 +52,8 @@ TOLERANCE_M = 0.05  # pairwise-distance consistency for identification
 FRAME_RATE_HZ = 2.0  # stereo frames while moving by odometry
 VO_DRIFT_PER_M = 0.01  # assumed odometry drift per metre travelled since the fix
 REREFERENCE_DRIFT_M = 0.04  # re-reference before a target when the assumed drift exceeds this
+FIX_GATE_M = 0.15  # once placed, a view that moves the set farther than this (plus 3× the assumed odometry
+# drift) from where odometry tracks it is a wrong identification, not a correction
 VO_LOST_FRAMES = 4  # consecutive lost frames that end an odometry chain
 VO_MAX_STEP_M = 0.5  # a jump larger than this between frames is not motion but a failure
 VIEWPOINT_TOLERANCE_M = 0.03
@@ -174,6 +176,7 @@ class InspectAgent(Agent):
         self.odometry = context.plugins is not None and context.plugins.has("odometry")
         self.T_object_origin: np.ndarray | None = None  # camera pose in the object frame at the chain's origin
         self.vo_path = 0.0
+        self.path_since_fix = 0.0  # odometry path since the last fused fix: what the fix gate allows for
         self.vo_lost = 0
         self.last_c: np.ndarray | None = None
         self.navigation = "usbl"
@@ -425,6 +428,16 @@ class InspectAgent(Agent):
             record["reason"] = result.details["reason"]
         # An ambiguous identification (the prior cannot choose between symmetric matches) is no fix.
         recognised = bool(result.recognised and result.T_cam_object is not None and not result.ambiguous)
+        if recognised and self.stage == "fine" and self.fixed and self.odometry and self.vo_lost < VO_LOST_FRAMES:
+            assert result.T_cam_object is not None
+            points = self.sets[self.set_id]
+            jump = float(np.max(np.linalg.norm(transform_points(T_world_cam @ result.T_cam_object, points)
+                                               - transform_points(self.T_wo, points), axis=1)))
+            gate = FIX_GATE_M + 3.0 * VO_DRIFT_PER_M * self.path_since_fix
+            if jump > gate:
+                recognised = False
+                record["recognised"], record["gated"] = False, True
+                record["reason"] = f"{jump:.2f} m from where odometry tracks the set (gate {gate:.2f} m)"
         if recognised:
             T_world_object = T_world_cam @ result.T_cam_object
             record["T_object_cam"] = invert(T_world_object) @ T_world_cam
@@ -470,6 +483,7 @@ class InspectAgent(Agent):
         """The fused views fix the object: trust it, count the set as visited and go on."""
         self.T_wo = fused[0]
         self.fixed = True
+        self.path_since_fix = 0.0
         self.T_wo_trusted = self.T_wo.copy()
         self.done.append(("set", self.set_id))
         self.context.emit("referenced", nav.time, element=self.context.element.id, set=self.set_id,
@@ -556,6 +570,7 @@ class InspectAgent(Agent):
             return
         self.vo_lost = 0
         self.vo_path += step
+        self.path_since_fix += step
         self.last_c = c.copy()
         T_world_cam = camera_pose(nav.north, nav.east, nav.depth, nav.heading, baseline=self.baseline)
         self.T_wo[:3, 3] = T_world_cam[:3, 3] - self.T_wo[:3, :3] @ c
