@@ -397,7 +397,8 @@ class InspectAgent(Agent):
         return self._over_set(self.set_id, altitude, (shift * float(x_axis[0]), shift * float(x_axis[1])))
 
     def _set_failed(self, nav: NavState, reason: str) -> None:
-        self.T_wo = self.T_wo_trusted.copy()  # what an unconfirmed search result suggested is dropped
+        if not self.fixed:  # what an unconfirmed search result suggested is dropped (a placed object is tracked)
+            self.T_wo = self.T_wo_trusted.copy()
         self.context.emit("set_not_recognised", nav.time, element=self.context.element.id, set=self.set_id,
                           reason=reason, attempts=sum(1 for a in self.attempts if a["set"] == self.set_id))
         self._replan(self.set_id, nav)
@@ -447,7 +448,10 @@ class InspectAgent(Agent):
         if not recognised:
             self._not_recognised(frame, nav)
             return
-        self.T_wo = T_world_cam @ result.T_cam_object
+        if not self.fixed:  # placing the object: each view refines the coarse prior the next one is taken with
+            self.T_wo = T_world_cam @ result.T_cam_object
+        # Re-referencing a placed object, odometry keeps tracking it: the views count only once they agree
+        # (a single wrong view must move neither the object nor the odometry chain's origin).
         if self.stage == "search":
             if result.set_id is not None and result.set_id != self.set_id:
                 # Referenced through the set that is in view; the planned one keeps its turn, now with a prior.
@@ -461,20 +465,24 @@ class InspectAgent(Agent):
         if result.model_points is not None and result.points_cam is not None:
             self.views.append((result.model_points, transform_points(T_world_cam, result.points_cam)))
         fused = fuse_views(self.views) if len(self.views) >= 2 else None
+        agreeing = fused[1] if fused is not None else 0
         if fused is not None:
-            self.T_wo, n_views, residual, n_points = fused
+            T_fused, n_views, residual, n_points = fused
             self.attempts.append({**{k: v for k, v in record.items() if not k.startswith("T_")},
                                   "stage": "fused", "views": n_views, "matched": n_points, "residual_m": residual,
-                                  "T_object_cam": invert(self.T_wo) @ T_world_cam})
-        self._start_chain(frame, nav)
-        if fused is None and len(self.views) >= 2 * FINE_VIEWS:
+                                  "T_object_cam": invert(T_fused) @ T_world_cam})
+            if not self.fixed or agreeing >= FINE_VIEWS:
+                self.T_wo = T_fused
+        if not self.fixed or agreeing >= FINE_VIEWS:
+            self._start_chain(frame, nav)
+        if agreeing < FINE_VIEWS and len(self.views) >= 2 * FINE_VIEWS:
             if self.fixed:
                 self._set_failed(nav, f"{len(self.views)} views of the set do not agree")
             else:
                 self.T_wo = self.T_wo_trusted.copy()
                 self._resume_search(nav)
             return
-        if fused is not None and len(self.views) >= FINE_VIEWS:
+        if fused is not None and agreeing >= FINE_VIEWS:  # two agreeing views can both be wrong the same way
             self._referenced(nav, fused)
             return
         self.goals, self.goal_index, self.phase = [self._fine_goal()], 0, "go"
@@ -496,11 +504,8 @@ class InspectAgent(Agent):
         if self.stage == "fine":
             self.fine_tries += 1
             # a hit that a closer view has confirmed keeps the longer budget of a placed object
-            fused = fuse_views(self.views) if len(self.views) >= 2 else None
-            if self.fine_tries <= (2 * FINE_VIEWS if self.fixed or self.views else CONFIRM_TRIES):
+            if self.fine_tries <= (3 * FINE_VIEWS if self.fixed or self.views else CONFIRM_TRIES):
                 self.goals, self.goal_index, self.phase = [self._fine_goal()], 0, "go"
-            elif fused is not None:  # fewer views than wished, but they agree: a fix all the same
-                self._referenced(nav, fused)
             elif self.fixed and ("set", self.set_id) in self.done:
                 # Recognised here before: this re-referencing did not work, the set is still good. Go on by
                 # odometry (its chain continues) rather than give the set up.
