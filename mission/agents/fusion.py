@@ -29,12 +29,13 @@ def consistent_views(views: Sequence[View], agreement: float = VIEW_AGREEMENT_M)
     return [views[j] for j in max(agree, key=len)]
 
 
-def fuse_views(views: Sequence[View], minimum: int = 2) -> tuple[np.ndarray, int, float, int] | None:
-    """T_world_object from the agreeing views, with the number of views and points used and the residual RMS
-    (m); None while fewer than `minimum` views agree."""
+def fuse_views(views: Sequence[View], minimum: int = 2, agreement: float = VIEW_AGREEMENT_M
+               ) -> tuple[np.ndarray, int, float, int] | None:
+    """T_world_object from the views that agree within `agreement` (m), with the number of views and points
+    used and the residual RMS (m); None while fewer than `minimum` views agree."""
     from perception_plugins.referencing import rigid_transform
 
-    agreeing = consistent_views(views)
+    agreeing = consistent_views(views, agreement)
     if len(agreeing) < minimum:
         return None
     model = np.vstack([m for m, _ in agreeing])

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from mission.agents.base import Agent, AgentContext
-from mission.agents.fusion import View, fuse_views
+from mission.agents.fusion import VIEW_AGREEMENT_M, View, fuse_views
 from mission.agents.hover import Goal, hover_command
 from mission.frames import camera_pose, invert, pose_matrix, transform_points
 from mission.language.models import Inspect, KnownObject
@@ -254,6 +254,13 @@ class InspectAgent(Agent):
         lower than `FINE_ALTITUDE_M`, and its deepest point inside the stereo range."""
         return min(max(FINE_ALTITUDE_M, fit_altitude(self.sets[set_id], self.field)), self._range_ceiling(set_id))
 
+    def _agreement(self) -> float:
+        """How closely views of the current set must agree: `VIEW_AGREEMENT_M` at the seed's 3.6 m, growing
+        with the range like the stereo depth error (σ_Z ∝ Z²), as the plug-in's own tolerance does."""
+        pts = self.sets[self.set_id]
+        reach = self._fine_altitude(self.set_id) + FINE_STEPS_M[len(FINE_STEPS_M) // 2] + float(np.ptp(pts[:, 2]))
+        return VIEW_AGREEMENT_M * max(1.0, (reach / FINE_ALTITUDE_M) ** 2)
+
     def _range_ceiling(self, set_id: str) -> float:
         """The highest view above a set's top that keeps its deepest point inside the stereo range."""
         return self.max_range - float(np.ptp(self.sets[set_id][:, 2])) - RANGE_MARGIN_M
@@ -464,7 +471,7 @@ class InspectAgent(Agent):
             return
         if result.model_points is not None and result.points_cam is not None:
             self.views.append((result.model_points, transform_points(T_world_cam, result.points_cam)))
-        fused = fuse_views(self.views) if len(self.views) >= 2 else None
+        fused = fuse_views(self.views, agreement=self._agreement()) if len(self.views) >= 2 else None
         agreeing = fused[1] if fused is not None else 0
         if fused is not None:
             T_fused, n_views, residual, n_points = fused
