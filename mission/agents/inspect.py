@@ -50,6 +50,8 @@ SEARCH_PRIOR_RADIUS_M = 4.0  # how far the database pose plus navigation may be 
 FINE_PRIOR_RADIUS_M = 0.4  # how far the current estimate may be off once referenced
 TOLERANCE_M = 0.05  # pairwise-distance consistency for identification
 FRAME_RATE_HZ = 2.0  # stereo frames while moving by odometry
+PASSING_RATE_HZ = 0.5  # searching, frames taken on the way between positions are tried too, this often
+PASSING_DEPTH_M = 0.5  # ... once the vehicle is within this of the search depth
 VO_DRIFT_PER_M = 0.01  # assumed odometry drift per metre travelled since the fix
 REREFERENCE_DRIFT_M = 0.04  # re-reference before a target when the assumed drift exceeds this
 FIX_GATE_M = 0.15  # once placed, a view that moves the set farther than this (plus 3× the assumed odometry
@@ -411,8 +413,9 @@ class InspectAgent(Agent):
         self._replan(self.set_id, nav)
         self._next(nav)
 
-    def _reference(self, frame: Any, nav: NavState) -> None:
-        """One referencing attempt on this frame at the current set."""
+    def _reference(self, frame: Any, nav: NavState, passing: bool = False) -> None:
+        """One referencing attempt on this frame at the current set (`passing`: a search frame taken on the way
+        to the next position; when it shows nothing the vehicle just goes on)."""
         assert self.context.plugins is not None
         T_world_cam = camera_pose(nav.north, nav.east, nav.depth, nav.heading, baseline=self.baseline)
         prior = invert(T_world_cam) @ self.T_wo
@@ -453,7 +456,8 @@ class InspectAgent(Agent):
         self.context.emit("referencing_attempt", nav.time, element=self.context.element.id,
                           **{k: v for k, v in record.items() if not k.startswith("T_") and k != "time"})
         if not recognised:
-            self._not_recognised(frame, nav)
+            if not passing:
+                self._not_recognised(frame, nav)
             return
         if not self.fixed:  # placing the object: each view refines the coarse prior the next one is taken with
             self.T_wo = T_world_cam @ result.T_cam_object
@@ -647,7 +651,14 @@ class InspectAgent(Agent):
         if self.phase == "capture" and frame is not None:
             self._reference(frame, nav)
             return Command(goal.heading, 0.0, depth=goal.depth, station=(goal.north, goal.east))
-        if frame is not None:
+        if frame is not None and self.stage == "search" and self.phase == "go":
+            # Searching, every frame on the way at about the search depth is a chance (seed 002 §3.4: the
+            # search motions go on until a set is recognised).
+            if self.search_started is not None and abs(nav.depth - goal.depth) <= PASSING_DEPTH_M:
+                self._reference(frame, nav, passing=True)
+                if self.stage != "search":  # a hit: the fine views start from here
+                    return Command.hold(nav)
+        elif frame is not None:
             self._odometry(frame, nav)
         command, there = self._go(nav, goal)
         if self.phase == "go" and there:
@@ -658,7 +669,9 @@ class InspectAgent(Agent):
         elif self.phase == "settle" and nav.time - self.hold_since >= SETTLE_S:
             self.phase = "capture"
             self.payload = frozenset({"stereo"})
-        if self.phase == "go" and self.T_object_origin is None:
+        if self.phase == "go" and self.stage == "search" and self.search_started is not None:
+            self.payload, self.frame_rate_hz = frozenset({"stereo"}), PASSING_RATE_HZ
+        elif self.phase == "go" and self.T_object_origin is None:
             self.payload = frozenset()  # no chain to feed: frames only when capturing
         return command
 
