@@ -49,9 +49,10 @@ class VehiclePath:
 
 def survey_trajectory(duration: float = 240.0, fps: float = 25.0, speed: tuple[float, float] = (0.4, 1.2),
                       altitude: tuple[float, float] = (3.5, 8.0), turn_rate_deg: float = 5.0,
-                      seed: int = 0) -> VehiclePath:
+                      seed: int = 0, start: tuple[float, float] = (0.0, 0.0)) -> VehiclePath:
     """A meandering pass: speed and altitude oscillating within their ranges, the heading swinging by up to
-    `turn_rate_deg` per second, small pitch and roll (±2°); starts at the origin heading north."""
+    `turn_rate_deg` per second, small pitch and roll (±2°); starts at `start` (north, east) heading north.
+    `centred_start` gives the start that centres a path on the origin (a long pass must stay over the seabed)."""
     rng = np.random.default_rng(seed)
     phase = rng.uniform(0, 2 * math.pi, 5)
     t = np.arange(int(round(duration * fps))) / fps
@@ -59,12 +60,19 @@ def survey_trajectory(duration: float = 240.0, fps: float = 25.0, speed: tuple[f
     yaw_rate = turn_rate_deg * np.sin(2 * np.pi * t / 53.0 + phase[1])
     heading = np.cumsum(yaw_rate) / fps
     hd = np.radians(heading)
-    north = np.concatenate([[0.0], np.cumsum(v[:-1] * np.cos(hd[:-1]) / fps)])
-    east = np.concatenate([[0.0], np.cumsum(v[:-1] * np.sin(hd[:-1]) / fps)])
+    north = start[0] + np.concatenate([[0.0], np.cumsum(v[:-1] * np.cos(hd[:-1]) / fps)])
+    east = start[1] + np.concatenate([[0.0], np.cumsum(v[:-1] * np.sin(hd[:-1]) / fps)])
     alt = altitude[0] + (altitude[1] - altitude[0]) * 0.5 * (1 - np.cos(2 * np.pi * t / 71.0 + phase[2] * 0))
     pitch = 2.0 * np.sin(2 * np.pi * t / 9.0 + phase[3])
     roll = 2.0 * np.sin(2 * np.pi * t / 7.0 + phase[4])
     return VehiclePath(t, np.column_stack([north, east, alt, heading, pitch, roll]))
+
+
+def centred_start(path: VehiclePath) -> tuple[float, float]:
+    """The (north, east) start that puts the middle of `path`'s extent on the origin, for the same pass again."""
+    lo, hi = path.states[:, :2].min(axis=0), path.states[:, :2].max(axis=0)
+    north, east = path.states[0, :2] - 0.5 * (lo + hi)
+    return float(north), float(east)
 
 
 def loop_trajectory(laps: float = 3.0, radius: float = 3.0, speed: float = 0.3, altitude: float = 4.0,
@@ -135,5 +143,5 @@ def render_sequence(world: World | Scene, poses_world_left: NDArray[np.float64],
     return frames
 
 
-__all__ = ["SequenceRenderer", "VehiclePath", "loop_trajectory", "render_sequence", "seabed_world",
+__all__ = ["SequenceRenderer", "VehiclePath", "centred_start", "loop_trajectory", "render_sequence", "seabed_world",
            "survey_trajectory"]

@@ -4,9 +4,10 @@ and, optionally, the virtual reference network — fed one frame at a time, onli
 Frames are pushed in order; the odometer buffers the frames since its last processed position and processes one
 when the buffer reaches the current step (fixed, or `adaptive.step_time`'s T·fps). A step that too few features
 support is halved (adaptive mode, down to one frame; seed 003's second mechanism); a step that fails outright is a
-tracking loss: the position is dead-reckoned at constant velocity and a new fragment starts there (the loss is
-counted, the odometer carries on). Positions relative to the origin come out as `Estimate`s, possibly several per
-push (a halved step emits the shorter position and then the rest of the buffer as it becomes due).
+tracking loss: the position is dead-reckoned at the median velocity of the last tracked steps (`_bridge`) and a
+new fragment starts there (the loss is counted, the odometer carries on). Positions relative to the origin come out
+as `Estimate`s, possibly several per push (a halved step emits the shorter position and then the rest of the buffer
+as it becomes due).
 """
 
 from __future__ import annotations
@@ -33,6 +34,9 @@ from perception_plugins.vo.frontend import Array, Frontend, Step
 from perception_plugins.vo.klt import KltTracker
 from perception_plugins.vo.network import NetworkSettings, ReferenceNetwork
 from perception_plugins.vo.se3 import from_rotvec_translation, invert, to_rotvec
+
+_BRIDGE_STEPS = 7
+"""Tracked steps whose median velocity bridges a tracking loss."""
 
 
 @dataclass(frozen=True)
@@ -62,11 +66,11 @@ class OdometerSettings:
     """Adaptive mode: generate features only where the next position is predicted to see too (third mechanism)."""
     threshold_px: float = 1.5
     calibrate_offset: bool = True
+    """KLT: estimate the pair's disparity offset from the fragments' motion (self-calibration)."""
     max_motion_depths: float = 1.0
     """A step moving farther than this many scene depths is rejected as a failure (the views could not overlap)."""
     max_turn_deg: float = 30.0
     """A step turning more than this is rejected as a failure."""
-    """KLT: estimate the pair's disparity offset from the fragments' motion (self-calibration)."""
     fps: float | None = None
     """Frame rate for the adaptive step; from the frames' times when None."""
     altitude: float | None = None
@@ -122,6 +126,7 @@ class Odometer:
         self._in_fragment = 0
         self._velocity: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None  # (rad/s, m/s) in camera
         self._speeds: list[float] = []
+        self._recent: list[NDArray[np.float64]] = []  # the last tracked steps' (rad/s, m/s), for dead reckoning
         self._last_dt = 0.0
         self._target = s.step
         self._depth: float | None = None
@@ -200,7 +205,7 @@ class Odometer:
         if step is None or step.count < s.min_track:
             # Tracking lost: dead-reckon this position and start a new fragment from it.
             self.stats.losses += 1
-            T_origin_b = last.T_origin @ T_last_b_pred
+            T_origin_b = last.T_origin @ self._bridge(dt)
             self._chain = self._chain.append(invert(key.T_origin) @ T_origin_b)
             self._restart(index, frame, T_origin_b)
             self._target = max(1, min(self._target, s.step))
@@ -245,6 +250,14 @@ class Odometer:
             return None
         return step
 
+    def _bridge(self, dt: float) -> Array:
+        """The motion over a lost step: the median of the last tracked steps' velocities, not the last one alone —
+        on poor images the step before a loss is often the worst estimated, and a lost stretch repeats it."""
+        if not self._recent:
+            return self._predict(dt)
+        w, v = np.split(np.median(np.stack(self._recent), axis=0), 2)
+        return from_rotvec_translation(w * dt, v * dt)
+
     def _restart(self, index: int, frame: StereoImages, T_origin_b: Array) -> None:
         self.frontend.start(frame)
         self._update_depth()
@@ -260,6 +273,7 @@ class Odometer:
         if dt <= 0:
             return
         self._velocity = (to_rotvec(T_last_b[:3, :3]) / dt, T_last_b[:3, 3] / dt)
+        self._recent = [*self._recent[-(_BRIDGE_STEPS - 1):], np.concatenate(self._velocity)]
         self._speeds.append(float(np.linalg.norm(T_last_b[:3, 3])) / dt)
         self._speeds = self._speeds[-2:]
         self._last_dt = dt

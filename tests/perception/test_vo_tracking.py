@@ -3,6 +3,7 @@ the classic scheme, the adaptive step with halving, and the plug-in contract."""
 
 from __future__ import annotations
 
+import math
 import os
 import tempfile
 from collections.abc import Iterator
@@ -64,6 +65,29 @@ def test_long_klt_tracking_follows_the_true_poses(survey: Sequence) -> None:
     assert survey.end_error(poses) < 0.01 * survey.path  # under 1 % of the path
     R_err = poses[-1, :3, :3].T @ survey.gt[-1, :3, :3]
     assert np.degrees(np.arccos(np.clip((np.trace(R_err) - 1) / 2, -1, 1))) < 0.3
+
+
+@pytest.mark.parametrize("fragment_steps", [1, 2, 4])
+def test_long_klt_fragments_span_the_steps_asked_for_while_features_survive(survey: Sequence,
+                                                                           fragment_steps: int) -> None:
+    # 80 frames at a step of 2: 40 positions after the origin, one fragment per `fragment_steps` of them (the
+    # texture keeps well over `refresh_features` alive, so no fragment ends early).
+    odometer = Odometer(settings_for("klt", step=2, fragment_steps=fragment_steps))
+    run_odometer(survey.frames, odometer)
+    assert odometer.stats.fragments == math.ceil(40 / fragment_steps)
+
+
+def test_centred_survey_pass_keeps_its_views_over_the_seabed() -> None:
+    from mission.sim.stereo_sequence import centred_start, seabed_world, survey_trajectory
+
+    path = survey_trajectory(duration=240.0, fps=25.0)
+    world = seabed_world()
+    reach = 0.5 * 600 / 500.0 * float(path.states[:, 2].max())  # half the widest footprint at 8 m
+    assert path.states[:, 0].max() + reach > world.seabed.north[1]  # from the origin it runs off the seabed
+    centred = survey_trajectory(duration=240.0, fps=25.0, start=centred_start(path))
+    np.testing.assert_allclose(np.diff(centred.states, axis=0), np.diff(path.states, axis=0), atol=1e-9)
+    for k, (lo, hi) in enumerate((world.seabed.north, world.seabed.east)):
+        assert lo < centred.states[:, k].min() - reach and centred.states[:, k].max() + reach < hi
 
 
 def test_classic_scheme_follows_the_true_poses(survey: Sequence) -> None:
