@@ -19,6 +19,11 @@ Degradations (all off by default; `Degradations`): the lamp's fall-off with rang
 turbidity from the rendered depth (I = J·exp(−c·d) + A·(1 − exp(−c·d)), d the range along each pixel's ray), then
 Gaussian blur, then Gaussian sensor noise, then rounding to 8 bits.
 
+Supersampling (`supersample=k`, off by default): each image is rendered at k× the width and height with the same
+field of view, then every k×k block is averaged (as a real sensor integrates the light over each pixel's area);
+the degradations apply to the averaged image. With the default 1, each pixel is one sample of the texture through
+OpenGL's mipmapped filtering, which lets a seabed texture finer than the pixels alias.
+
 `StereoFrame.depth_left` is the renderer's depth buffer: ground truth for tests and benchmarks only. Perception
 plug-ins are handed the images, K, the baseline and the pose prior, never the depth.
 
@@ -154,6 +159,16 @@ def _gl_context(width: int, height: int) -> Any:
                       "(libegl1) or OSMesa (libosmesa6)")
 
 
+def _block_mean(image: NDArray[np.float32], k: int) -> NDArray[np.float32]:
+    """The mean of every k×k block (cv2.INTER_AREA for a whole factor); an infinite depth stays infinite.
+
+    >>> _block_mean(np.arange(16, dtype=np.float32).reshape(4, 4), 2).tolist()
+    [[2.5, 4.5], [10.5, 12.5]]
+    """
+    h, w = image.shape[0] // k, image.shape[1] // k
+    return np.asarray(image.reshape(h, k, w, k).mean(axis=(1, 3), dtype=np.float32), dtype=np.float32)
+
+
 class StereoCamera:
     """Renders rectified stereo pairs of a world from poses of the left camera or of the vehicle.
 
@@ -165,10 +180,12 @@ class StereoCamera:
     def __init__(self, world: World | Scene | MjWorld, settings: Stereo | None = None,
                  degradations: Degradations | None = None, *, texture: Texture | None = None,
                  appearance: Appearance | None = None, lamp: Lamp | None = None, near_m: float = 0.1,
-                 far_m: float = 200.0) -> None:
+                 far_m: float = 200.0, supersample: int = 1) -> None:
         """`world`: a world file's model, a scene or a plain `MjWorld` (the seabed texture comes from `texture`,
         else the world's or scene's own). The camera compiles its own model with the appearance, sized for its
-        images."""
+        images. `supersample`: render k× larger and average k×k blocks (see the module docstring)."""
+        if not isinstance(supersample, int) or supersample < 1:
+            raise ValueError(f"supersample must be a whole number >= 1, got {supersample!r}")
         if isinstance(world, World):
             scene, texture = build_scene(world), texture or world.seabed.texture
         elif isinstance(world, MjWorld):
@@ -182,12 +199,15 @@ class StereoCamera:
         self.lamp = lamp or Lamp()
         self.K = intrinsics(self.settings)
         self.near_m, self.far_m = near_m, far_m
+        self.supersample = supersample
         w, h = self.settings.width, self.settings.height
-        self.world = MjWorld(scene, offscreen=(w, h), near_m=near_m, far_m=far_m,
+        # The rendered frustum is the images' (same fx/W ratio): only the number of samples per pixel changes.
+        w_gl, h_gl = supersample * w, supersample * h
+        self.world = MjWorld(scene, offscreen=(w_gl, h_gl), near_m=near_m, far_m=far_m,
                              appearance=appearance or Appearance(seabed=texture or scene.texture))
         self._rng = np.random.default_rng(self.degradations.seed)
-        self._rect = mujoco.MjrRect(0, 0, w, h)
-        self._gl = _gl_context(w, h)
+        self._rect = mujoco.MjrRect(0, 0, w_gl, h_gl)
+        self._gl = _gl_context(w_gl, h_gl)
         self._context: Any = mujoco.MjrContext(self.world.model, mujoco.mjtFontScale.mjFONTSCALE_100)
         mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._context)
         self._context.readDepthMap = mujoco.mjtDepthMap.mjDEPTH_ZEROFAR
@@ -197,8 +217,8 @@ class StereoCamera:
         self._option.geomgroup[SEABED_TILE_GROUP] = self._option.geomgroup[VISUAL_GROUP] = 1
         for flag in ("mjRND_SHADOW", "mjRND_SKYBOX", "mjRND_HAZE", "mjRND_REFLECTION", "mjRND_FOG"):
             self._scene.flags[getattr(mujoco.mjtRndFlag, flag)] = 0
-        self._rgb = np.empty((h, w, 3), dtype=np.uint8)
-        self._depth = np.empty((h, w), dtype=np.float32)
+        self._rgb = np.empty((h_gl, w_gl, 3), dtype=np.uint8)
+        self._depth = np.empty((h_gl, w_gl), dtype=np.float32)
         # Range along each pixel's ray per metre of depth, for turbidity.
         u = (np.arange(w) - self.K[0, 2]) / self.K[0, 0]
         v = (np.arange(h) - self.K[1, 2]) / self.K[1, 1]
@@ -247,6 +267,8 @@ class StereoCamera:
             rgb, buf = self._rgb[::-1], self._depth[::-1]  # OpenGL rows run bottom-up
             grey = np.asarray(rgb @ np.array([0.299, 0.587, 0.114], dtype=np.float32), dtype=np.float32)
             z = self._metric_depth(buf)
+            if self.supersample > 1:
+                grey, z = _block_mean(grey, self.supersample), _block_mean(z, self.supersample)
             images.append(self._degrade(grey, z))
             depths.append(z)
         return StereoFrame(images[0], images[1], self.K.copy(), self.baseline, T_world_left.copy(), depths[0])

@@ -94,11 +94,12 @@ class SequenceRenderer:
     """Renders the stereo pairs of a vehicle path over a world, one frame at a time (index or iterate)."""
 
     def __init__(self, world: World | Scene, path: VehiclePath, settings: Stereo | None = None,
-                 degradations: Degradations | None = None) -> None:
+                 degradations: Degradations | None = None, supersample: int = 1) -> None:
+        """`supersample`: `StereoCamera`'s (render k× larger, average k×k blocks); 1 renders directly."""
         self.scene = world if isinstance(world, Scene) else build_scene(world)
         texture = world.seabed.texture if isinstance(world, World) else None
         self.settings = settings or Stereo(width=600, height=400, fx=500.0, baseline=0.3)
-        self.camera = StereoCamera(self.scene, self.settings, degradations, texture=texture)
+        self.camera = StereoCamera(self.scene, self.settings, degradations, texture=texture, supersample=supersample)
         self.path = path
         self.poses = np.stack([self._pose(i) for i in range(len(path))])
         """(N, 4, 4) true T_world_left of every frame."""
