@@ -397,3 +397,35 @@ def test_the_plugin_refuses_a_fix_that_tilts_the_object_off_the_vertical(monkeyp
         np.testing.assert_allclose(result.T_cam_object, T_true, atol=1e-6)
     else:
         assert "tilted 15 deg" in result.details["reason"]
+
+
+@pytest.mark.parametrize(("sink_m", "recognised"), [(0.4, True), (-0.4, True), (2.5, False), (-1.5, False)])
+def test_the_plugin_refuses_a_fix_that_moves_the_object_up_or_down(monkeypatch, sink_m, recognised):
+    """A module's top corners fit flat seabed texture too; such a fix sinks the object by its height. Structures
+    rest on the seabed at the database's depth (within a metre), so a fix that moves the set along the prior's
+    vertical by more than the depth gate (1 m) is implausible, while metres sideways are not."""
+    from types import SimpleNamespace
+
+    from mission.plugin_api import PointSetModel, ReferencingRequest, StereoImages
+    from perception_plugins.referencing import plugin as plugin_module
+
+    model = np.array([[2.0, 1, -2], [6, 1, -2], [6, 4, -2], [2, 4, -2], [4, 2.5, -2.6]])
+    yaw = np.radians(30.0)
+    prior = np.eye(4)
+    prior[:3, :3] = [[np.cos(yaw), -np.sin(yaw), 0], [np.sin(yaw), np.cos(yaw), 0], [0, 0, 1]]
+    prior[:3, 3] = (-4.0, -2.5, 5.6)  # the object's top 3.6 m in front of a down-looking camera
+    T_true = prior.copy()
+    T_true[:3, 3] += (1.5, -1.0, sink_m)  # metres off sideways (allowed) and sink_m along the vertical
+    cloud = model @ T_true[:3, :3].T + T_true[:3, 3]
+    monkeypatch.setattr(plugin_module, "stereo_cloud", lambda *a, **k: SimpleNamespace(points_cam=cloud))
+    plugin = plugin_module.StereoReferencingPlugin()
+    plugin.configure({})
+    blank = np.zeros((90, 120), np.uint8)
+    frame = StereoImages(0.0, blank, blank, np.array([[100.0, 0, 60], [0, 100, 45], [0, 0, 1]]), 0.25)
+    result = plugin.process(frame, ReferencingRequest((PointSetModel("m", "module-top", model),), prior, 0.05, 4.0))
+    assert result.recognised is recognised
+    if recognised:
+        np.testing.assert_allclose(result.T_cam_object, T_true, atol=1e-6)
+    else:
+        word = "deeper" if sink_m > 0 else "shallower"
+        assert f"{abs(sink_m):.1f} m {word} than the prior" in result.details["reason"]
