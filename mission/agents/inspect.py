@@ -391,12 +391,14 @@ class InspectAgent(Agent):
         offsets = expanding_square(SEARCH_STEP_M, SEARCH_POSITIONS) \
             if self.params.search.pattern == "expanding-square" else meander_offsets(SEARCH_STEP_M,
                                                                                       SEARCH_POSITIONS)
-        # Any set will do: the most distinctive first (more points, more relief), ring by ring of the pattern
-        # around each set as currently placed, every other ring a little higher (recognition is sensitive to
-        # the range, and the database may be off in depth too).
+        # Any set will do: the whole pattern around the most distinctive set first (more points, more relief),
+        # then around the next, every other position a little higher (recognition is sensitive to the range,
+        # and the database may be off in depth too). Flying one set's pattern leg by leg, the frames taken on
+        # the way sweep the ground between its positions; alternating sets position by position, they did not
+        # (measured: with the database 2.3 m off, no view of 131 had the whole module top in it).
         order = sorted(self.sets, key=lambda s: (-len(self.sets[s]), -float(np.ptp(self.sets[s][:, 2])), s))
         self.search_goals[:] = [self._over_set(s, self._search_altitude(s) + SEARCH_RAISE_M * (ring % 2), o, True)
-                                for ring, o in enumerate(offsets) for s in order]
+                                for s in order for ring, o in enumerate(offsets)]
 
     def _begin_fine(self, set_id: str) -> None:
         self.set_id, self.stage = set_id, "fine"
