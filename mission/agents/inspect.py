@@ -484,8 +484,14 @@ class InspectAgent(Agent):
             self._begin_fine(self.set_id)
             return
         if result.model_points is not None and result.points_cam is not None:
-            self.views.append((result.model_points, transform_points(T_world_cam, result.points_cam)))
+            # A placed object's views are kept in its frame as odometry tracks it, not in the navigation frame:
+            # dead reckoning drifts centimetres over the minute the views take, and views that agree in the
+            # object's frame stopped agreeing in the navigation frame (measured: 6 good views, none fused).
+            frame_T = invert(self.T_wo) @ T_world_cam if self.fixed else T_world_cam
+            self.views.append((result.model_points, transform_points(frame_T, result.points_cam)))
         fused = fuse_views(self.views, agreement=self._agreement()) if len(self.views) >= 2 else None
+        if fused is not None and self.fixed:  # the fusion corrects the tracked frame: compose it
+            fused = (self.T_wo @ fused[0], *fused[1:])
         agreeing = fused[1] if fused is not None else 0
         if fused is not None:
             T_fused, n_views, residual, n_points = fused
