@@ -503,7 +503,9 @@ class InspectAgent(Agent):
         if not self.fixed or agreeing >= FINE_VIEWS:
             self._start_chain(frame, nav)
         if agreeing < FINE_VIEWS and len(self.views) >= 2 * FINE_VIEWS:
-            if self.fixed:
+            if self.fixed and ("set", self.set_id) in self.done:
+                self._rereference_failed(nav)
+            elif self.fixed:
                 self._set_failed(nav, f"{len(self.views)} views of the set do not agree")
             else:
                 self.T_wo = self.T_wo_trusted.copy()
@@ -534,12 +536,7 @@ class InspectAgent(Agent):
             if self.fine_tries <= (3 * FINE_VIEWS if self.fixed or self.views else CONFIRM_TRIES):
                 self.goals, self.goal_index, self.phase = [self._fine_goal()], 0, "go"
             elif self.fixed and ("set", self.set_id) in self.done:
-                # Recognised here before: this re-referencing did not work, the set is still good. Go on by
-                # odometry (its chain continues) rather than give the set up.
-                self.context.emit("rereference_failed", nav.time, element=self.context.element.id, set=self.set_id,
-                                  odometry_path_m=round(self.vo_path, 3))
-                self.vo_path, self.vo_lost = 0.0, 0  # the next attempt is due after as much motion again
-                self._next(nav)
+                self._rereference_failed(nav)
             elif self.fixed:
                 self._set_failed(nav, "not recognised from above the set")
             else:  # the search's hit was not confirmed: drop it, and trust no more search hits on this set
@@ -553,6 +550,14 @@ class InspectAgent(Agent):
         self.phase = "go"
         if self.goal_index >= len(self.goals):
             self._search_failed(nav, f"no set of '{self.obj.id}' recognised at {len(self.goals)} search positions")
+
+    def _rereference_failed(self, nav: NavState) -> None:
+        """A set referenced here before was not recognised again, or its views did not agree: the set is still
+        good and the object still tracked. Go on by odometry (its chain continues) rather than give the set up."""
+        self.context.emit("rereference_failed", nav.time, element=self.context.element.id, set=self.set_id,
+                          odometry_path_m=round(self.vo_path, 3))
+        self.vo_path, self.vo_lost = 0.0, 0  # the next attempt is due after as much motion again
+        self._next(nav)
 
     def _resume_search(self, nav: NavState) -> None:
         self.stage, self.goals, self.views, self.fine_tries = "search", self.search_goals, [], 0
