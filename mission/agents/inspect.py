@@ -637,15 +637,18 @@ class InspectAgent(Agent):
         name = f"photos/{self.context.element.id}/{tid}_{k:02d}.png"
         self.context.artifacts.save_image(name, frame.left)
         T_object_cam = self._camera_in_object(nav)
+        # The altimeter can forbid the viewpoint's depth (something under it stands higher than the database
+        # says: a tarpaulin over a valve panel); the photo is then taken from the lowest safe depth, and says so.
+        limited = self._altitude_floor(nav) < self._target_goal().depth - 0.01
         record = {"target": tid, "index": k, "time": frame.time, "file": name,
                   "viewpoint_object": entry["viewpoint_object"],
                   "T_object_cam_est": T_object_cam.round(6).tolist(),
                   "camera_error_est_m": round(float(np.linalg.norm(T_object_cam[:3, 3] - self.viewpoint)), 4),
-                  "odometry_path_m": round(self.vo_path, 3)}
+                  "altitude_limited": limited, "odometry_path_m": round(self.vo_path, 3)}
         self.photos.append(record)
         self.context.artifacts.append_record(f"photos/{self.context.element.id}/index.jsonl", record)
         self.context.emit("photo", nav.time, element=self.context.element.id, target=tid, index=k, file=name,
-                          camera_error_est_m=record["camera_error_est_m"])
+                          camera_error_est_m=record["camera_error_est_m"], altitude_limited=limited)
         entry["photos"] = k + 1
         self.last_photo = nav.time
         if entry["photos"] >= entry["photos_requested"]:
