@@ -625,6 +625,10 @@ class InspectAgent(Agent):
         self.phase = "go"
         self.last_photo = -math.inf
         self.target_started = nav.time
+        # Whether the altimeter forbade the viewpoint's depth on the way (something under it stands higher than
+        # the database says: a tarpaulin over a valve panel); the photos then come from the lowest safe depth,
+        # and say so.
+        self.altitude_limited = False
 
     def _target_goal(self) -> Goal:
         camera = transform_points(self.T_wo, self.viewpoint[None, :])[0]
@@ -637,9 +641,7 @@ class InspectAgent(Agent):
         name = f"photos/{self.context.element.id}/{tid}_{k:02d}.png"
         self.context.artifacts.save_image(name, frame.left)
         T_object_cam = self._camera_in_object(nav)
-        # The altimeter can forbid the viewpoint's depth (something under it stands higher than the database
-        # says: a tarpaulin over a valve panel); the photo is then taken from the lowest safe depth, and says so.
-        limited = self._altitude_floor(nav) < self._target_goal().depth - 0.01
+        limited = self.altitude_limited
         record = {"target": tid, "index": k, "time": frame.time, "file": name,
                   "viewpoint_object": entry["viewpoint_object"],
                   "T_object_cam_est": T_object_cam.round(6).tolist(),
@@ -709,6 +711,9 @@ class InspectAgent(Agent):
                 self._next(nav)  # re-references first: the chain is broken
                 return Command.hold(nav)
         goal = self._target_goal()
+        over = math.hypot(goal.north - nav.north, goal.east - nav.east) <= OVER_GOAL_M
+        if over and self._altitude_floor(nav) < goal.depth - 0.01:
+            self.altitude_limited = True
         slack = 1.0 if self.phase == "go" else 2.0  # hysteresis: once there, noise must not send it back
         command, there = self._go(nav, goal, slack * VIEWPOINT_TOLERANCE_M, slack * VIEWPOINT_DEPTH_TOLERANCE_M)
         if self.phase == "go" and there:
