@@ -11,6 +11,8 @@ from mission.sim.run import check_supported
 ALL = sorted(MISSIONS.glob("*.yaml"))
 EXPECTED_ABORT = {"geofence_abort.yaml"}
 OCCLUDED_SET = {"manifold_inspection_tarp.yaml": "skid-east"}  # a tarpaulin hides it in that world
+# ... and stands 0.25 m above the valve panels, so the altimeter forbids their viewpoints' depth (photos say so)
+ALTITUDE_LIMITED = {"manifold_inspection_tarp.yaml": {"valve-panel-A", "valve-panel-B"}}
 
 
 def test_there_are_missions():
@@ -59,6 +61,8 @@ def test_mission_validates_and_simulates(path, tmp_path):
                 assert target["photos"] == target["photos_requested"], tid
                 assert target["camera_error_max_m"] <= 0.1 and target["target_in_every_photo"], (tid, target)
             assert (tmp_path / "run" / "photos" / element["id"] / "index.jsonl").is_file()
+            limited = {p["target"] for p in element["photos"] if p["altitude_limited"]}
+            assert limited == ALTITUDE_LIMITED.get(path.name, limited), limited
             hidden = OCCLUDED_SET.get(path.name)
             if hidden is not None:  # the hidden set failed, the order was re-planned, and it went on without it
                 assert [r["failed_set"] for r in element["replans"]].count(hidden) >= 1
