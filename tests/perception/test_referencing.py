@@ -369,15 +369,26 @@ def test_referencing_stays_within_its_time_budget_when_the_object_is_absent():
     assert not result.exact                                                 # it said it stopped early
 
 
-@pytest.mark.parametrize(("tilt_deg", "recognised"), [(2.0, True), (15.0, False)])
-def test_the_plugin_refuses_a_fix_that_tilts_the_object_off_the_vertical(monkeypatch, tilt_deg, recognised):
-    """A flat set can fit wrong correspondences by tilting; objects rest on the seabed, so a fix whose vertical
-    axis leaves the prior's by more than the tilt gate (6°) is implausible, whatever its residual."""
+def _plugin_result(monkeypatch, model, T_true, prior, set_id, radius):
+    """The plug-in's answer when its stereo cloud is exactly the model placed at T_true (camera frame)."""
     from types import SimpleNamespace
 
     from mission.plugin_api import PointSetModel, ReferencingRequest, StereoImages
     from perception_plugins.referencing import plugin as plugin_module
 
+    cloud = model @ T_true[:3, :3].T + T_true[:3, 3]
+    monkeypatch.setattr(plugin_module, "stereo_cloud", lambda *a, **k: SimpleNamespace(points_cam=cloud))
+    plugin = plugin_module.StereoReferencingPlugin()
+    plugin.configure({})
+    blank = np.zeros((90, 120), np.uint8)
+    frame = StereoImages(0.0, blank, blank, np.array([[100.0, 0, 60], [0, 100, 45], [0, 0, 1]]), 0.25)
+    return plugin.process(frame, ReferencingRequest((PointSetModel("m", set_id, model),), prior, 0.05, radius))
+
+
+@pytest.mark.parametrize(("tilt_deg", "recognised"), [(2.0, True), (15.0, False)])
+def test_the_plugin_refuses_a_fix_that_tilts_the_object_off_the_vertical(monkeypatch, tilt_deg, recognised):
+    """A flat set can fit wrong correspondences by tilting; objects rest on the seabed, so a fix whose vertical
+    axis leaves the prior's by more than the tilt gate (6°) is implausible, whatever its residual."""
     model = np.array([[0.0, 0, 0], [0, 5, 0], [1, 1.2, -0.3], [1.2, 4, -0.35], [0.5, 2.5, -0.2]])
     prior = np.eye(4)
     prior[:3, 3] = (-0.5, -2.5, 6.0)  # the set 6 m in front of a down-looking camera
@@ -385,13 +396,7 @@ def test_the_plugin_refuses_a_fix_that_tilts_the_object_off_the_vertical(monkeyp
     tilt = np.array([[np.cos(t), 0, np.sin(t)], [0, 1, 0], [-np.sin(t), 0, np.cos(t)]])
     T_true = prior.copy()
     T_true[:3, :3] = tilt
-    cloud = model @ T_true[:3, :3].T + T_true[:3, 3]
-    monkeypatch.setattr(plugin_module, "stereo_cloud", lambda *a, **k: SimpleNamespace(points_cam=cloud))
-    plugin = plugin_module.StereoReferencingPlugin()
-    plugin.configure({})
-    blank = np.zeros((90, 120), np.uint8)
-    frame = StereoImages(0.0, blank, blank, np.array([[100.0, 0, 60], [0, 100, 45], [0, 0, 1]]), 0.25)
-    result = plugin.process(frame, ReferencingRequest((PointSetModel("m", "skid", model),), prior, 0.05, 0.4))
+    result = _plugin_result(monkeypatch, model, T_true, prior, "skid", 0.4)
     assert result.recognised is recognised
     if recognised:
         np.testing.assert_allclose(result.T_cam_object, T_true, atol=1e-6)
@@ -404,11 +409,6 @@ def test_the_plugin_refuses_a_fix_that_moves_the_object_up_or_down(monkeypatch, 
     """A module's top corners fit flat seabed texture too; such a fix sinks the object by its height. Structures
     rest on the seabed at the database's depth (within a metre), so a fix that moves the set along the prior's
     vertical by more than the depth gate (1 m) is implausible, while metres sideways are not."""
-    from types import SimpleNamespace
-
-    from mission.plugin_api import PointSetModel, ReferencingRequest, StereoImages
-    from perception_plugins.referencing import plugin as plugin_module
-
     model = np.array([[2.0, 1, -2], [6, 1, -2], [6, 4, -2], [2, 4, -2], [4, 2.5, -2.6]])
     yaw = np.radians(30.0)
     prior = np.eye(4)
@@ -416,13 +416,7 @@ def test_the_plugin_refuses_a_fix_that_moves_the_object_up_or_down(monkeypatch, 
     prior[:3, 3] = (-4.0, -2.5, 5.6)  # the object's top 3.6 m in front of a down-looking camera
     T_true = prior.copy()
     T_true[:3, 3] += (1.5, -1.0, sink_m)  # metres off sideways (allowed) and sink_m along the vertical
-    cloud = model @ T_true[:3, :3].T + T_true[:3, 3]
-    monkeypatch.setattr(plugin_module, "stereo_cloud", lambda *a, **k: SimpleNamespace(points_cam=cloud))
-    plugin = plugin_module.StereoReferencingPlugin()
-    plugin.configure({})
-    blank = np.zeros((90, 120), np.uint8)
-    frame = StereoImages(0.0, blank, blank, np.array([[100.0, 0, 60], [0, 100, 45], [0, 0, 1]]), 0.25)
-    result = plugin.process(frame, ReferencingRequest((PointSetModel("m", "module-top", model),), prior, 0.05, 4.0))
+    result = _plugin_result(monkeypatch, model, T_true, prior, "module-top", 4.0)
     assert result.recognised is recognised
     if recognised:
         np.testing.assert_allclose(result.T_cam_object, T_true, atol=1e-6)
