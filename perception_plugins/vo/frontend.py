@@ -54,7 +54,9 @@ def grey(image: NDArray[np.uint8]) -> NDArray[np.uint8]:
 
 
 FLAT_FIELD_FLOOR = 1.0
-"""Added to the local mean before dividing (grey levels): keeps the darkest corners from amplifying sensor noise."""
+"""Added to the local mean before dividing (grey levels), so that black areas (a lamp failure) divide by no zero.
+It does not limit the gain in dim areas: there the flat field amplifies noise with the texture (measured on the
+degraded mud run: KLT losses 9.6 → 16 %; a floor of 20–60 changed them little)."""
 
 
 def flat_field(image: NDArray[np.uint8], sigma_px: float) -> NDArray[np.uint8]:
