@@ -4,8 +4,9 @@ Survey lines stop a standoff short of a zone, to leave room for the turn, and me
 the strip they leave is covered by passes that follow the zone at the standoff, on a ring whose corners the
 vehicle can fly (the zone grown by the standoff, its concave corners rounded to the turning radius). Only the
 stretches of ring whose swath reaches uncovered free area are flown (a segment is needed if its own swath, square
-at the ends as the coverage is counted, covers some of it; short gaps between needed segments are flown through),
-the most useful first, until what stays uncovered is within the tolerance.
+at the ends as the coverage is counted, covers some of it; short gaps between needed segments are flown through,
+unless the planner orders the stretches among its cells itself), the most useful first, until what stays uncovered
+is within the tolerance.
 """
 
 from __future__ import annotations
@@ -100,9 +101,12 @@ def _needed(ring: Array, residual: BaseGeometry, swath: float) -> NDArray[np.boo
     return hit | np.roll(hit, 1)                           # point k ends segment k - 1 and starts segment k
 
 
-def contour_runs(scene: Scene, residual: BaseGeometry, spacing: float, tolerance: float) -> list[Run]:
+def contour_runs(scene: Scene, residual: BaseGeometry, spacing: float, tolerance: float,
+                 bridge: float | None = None) -> list[Run]:
     """Contour passes needed so that at most `tolerance` (a fraction of the free area) of `residual`, the free
-    area the lines leave uncovered, stays uncovered."""
+    area the lines leave uncovered, stays uncovered. Gaps shorter than `bridge` (default: the larger of twice the
+    standoff and the spacing) between the stretches needed are flown through; a planner that orders the passes
+    among its other tasks may bridge nothing, and fly from one stretch to the next only where that is shortest."""
     if not scene.has_zones:
         return []
     budget = tolerance * scene.free.area
@@ -112,7 +116,8 @@ def contour_runs(scene: Scene, residual: BaseGeometry, spacing: float, tolerance
     covers: list[BaseGeometry] = []
     for ring in contour_rings(scene, spacing):
         need = _needed(ring, residual, scene.swath)
-        for arc in _stretches(need, ring, bridge=max(2.0 * scene.standoff, spacing)):
+        gap = max(2.0 * scene.standoff, spacing) if bridge is None else bridge
+        for arc in _stretches(need, ring, gap):
             if len(arc) < 2:
                 continue
             arcs.append(arc)

@@ -49,8 +49,9 @@ class Joiner:
         pieces = self.sweep.pieces
         for level in range(PULL_STEPS + 1):
             cut = level * self.step
-            todo = [k for k in pending
-                    if cut <= min(pieces[requests[k][0]].length, pieces[requests[k][2]].length) + 1e-9]
+            todo = [k for k in pending        # no end is pulled back into a detour
+                    if cut <= min(pieces[requests[k][0]].room(requests[k][1]),
+                                  pieces[requests[k][2]].room(-requests[k][1])) + 1e-9]
             if not todo:
                 break
             a = np.array([requests[k][0] for k in todo])
@@ -90,15 +91,16 @@ class Joiner:
             cut_end[j] = join.cut_a
             cut_start[j + 1] = join.cut_b
         parts: list[Array] = []
-        lines = []
+        lines: list[Array] = []
         for j, (pid, d) in enumerate(items):
             p = self.sweep.pieces[pid]
             u_start = (p.u0 if d > 0 else p.u1) + d * cut_start[j]
             u_end = (p.u1 if d > 0 else p.u0) - d * cut_end[j]
-            seg = self.sweep.points(np.array([u_start, u_end]), np.array([p.v, p.v]))
-            lines.append(seg)
-            parts.append(seg[:1] if j == 0 else joins[j - 1].path[1:])
-            parts.append(seg[1:])
+            uv = p.uv(u_start, u_end)
+            pts = self.sweep.points(uv[:, 0], uv[:, 1])
+            lines.extend(pts[k : k + 2] for k in range(len(pts) - 1))     # a detour's every straight is a pass
+            parts.append(pts[:1] if j == 0 else joins[j - 1].path[1:])
+            parts.append(pts[1:])
         return Run(np.concatenate(parts), tuple(lines), self.sweep.angle(items[0][1]),
                    self.sweep.angle(items[-1][1]), k - 1)
 

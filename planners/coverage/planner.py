@@ -24,8 +24,8 @@ from .heading import (
 from .headlands import core_region, headland_tasks
 from .plan import CoveragePlan, assemble, estimated_length
 from .runs import Run
-from .scene import Scene
-from .sweep import Sweep, SweepCache
+from .scene import QUAD, Scene
+from .sweep import Passing, Sweep, SweepCache
 from .tasks import cell_tasks, order_tasks, trimmed, trimmed_rows, uncovered_area
 
 Array = NDArray[np.float64]
@@ -34,9 +34,11 @@ Option = tuple[float, Sweep, list[Run], int, str, bool]
 SHORTLIST = 2
 FULL_PLANS = 2         # line directions ordered in full
 SMALL_AREA = 0.5e6     # m²: areas this small plan quickly, and try twice as many line directions
+ALTERNATIVE_AREA = 2.5e6   # m²: areas this small also try their lines cut at every zone (larger ones take too long)
 HEADLAND_PLANS = 1     # of which also planned in the headland layout (more gained nothing measurable)
 SLIVER, FINE_SLIVER = 1e-3, 1e-5   # parts of a band (in spacing²) a cut line may give up
 INSET = 0.9            # share of the swath's overlap reach by which the outermost lines stand in
+REACH = 0.5            # spacings by which a line may bend aside round a zone (more gained nothing measurable)
 
 
 def meander(
@@ -58,14 +60,18 @@ def meander(
     `spacing` apart at most (the spacing is shrunk so that a whole number of lines fits), each long enough that a
     swath of `spacing` covers its band (where `swath` is wider, the outermost lines stand in from the boundary by
     most of the overlap, which may save a line); they stop short of the no-go zones by the turning radius plus
-    `clearance`, and no part of the path comes closer to a zone than half the clearance. Where no-go zones (or
-    bays of the boundary) split the lines, the free area is decomposed into boustrophedon cells, each flown as
-    its own meander, and the cells, their start corners and directions are ordered to minimise the transits
-    (exactly while the tasks and their variants are few, greedy + 2-opt + or-opt beyond); transits route round
-    the zones. Turns are Dubins paths of radius `turn_radius`: U-turns when lines are at least 2R apart, Ω-turns
-    otherwise. Passes along the zones' boundaries are added where the lines leave more than `fill_tolerance` of
-    the free area uncovered by a swath of `swath` (default: the spacing). The path starts at the line end
-    nearest `start` and prefers to finish near `finish`.
+    `clearance`, and no part of the path comes closer to a zone than half the clearance. Our lines need not stop
+    at a zone they do not cross by the clearance (no turn is made there): they run on past it, slid sideways by up
+    to the overlap they have to spare, or bent round it on Dubins ramps by up to half a spacing (`sweep.Passing`);
+    over areas up to 2.5 km² the lines cut at every zone are planned too, and the shorter plan wins.
+
+    Where no-go zones (or bays of the boundary) split the lines, the free area is decomposed into boustrophedon
+    cells, each flown as its own meander, and the cells, their start corners and directions are ordered to
+    minimise the transits (exactly while the tasks and their variants are few, greedy + 2-opt + or-opt beyond);
+    transits route round the zones. Turns are Dubins paths of radius `turn_radius`: U-turns when lines are at
+    least 2R apart, Ω-turns otherwise. Passes along the zones' boundaries are added where the lines leave more
+    than `fill_tolerance` of the free area uncovered by a swath of `swath` (default: the spacing). The path
+    starts at the line end nearest `start` and prefers to finish near `finish`.
 
     Where a zone is met, the contour passes next to it cover half a swath beyond the standoff: the lines there are
     cut back to what the passes leave uncovered (`trims`), so that nothing is swept twice; where a boundary
@@ -110,13 +116,15 @@ def meander(
     # zones and (the best) in the headland layout too
     # our lines: the outermost ones may stand in from the edge by what the swath's overlap covers
     inset = max(0.0, INSET * 0.5 * (scene.swath - spacing))
-    ours = SweepCache(scene.region, scene.forbidden, spacing, inset)
-    drafts = sorted((cell_tasks(scene, ours.get(float(h)), fill_tolerance) for h in heads
-                     if ours.get(float(h)).pieces), key=lambda t: t.rough_length())[:FULL_PLANS * _scale(scene)]
+    passing = _passing(scene, spacing, inset)
+    lined = _line_layouts(scene, spacing, inset, passing, heads)
+    drafts = sorted((cell_tasks(scene, sw, fill_tolerance) for sw in lined),
+                    key=lambda t: t.rough_length())[:FULL_PLANS * _scale(scene)]
     layouts = [(draft, False) for draft in drafts]
     rings = headland_tasks(scene)
     if rings and drafts:
-        core = SweepCache(core_region(scene, [variants[0] for variants in rings]), scene.forbidden, spacing, inset)
+        core = SweepCache(core_region(scene, [variants[0] for variants in rings]), scene.forbidden, spacing, inset,
+                          passing)
         for draft in drafts[:HEADLAND_PLANS]:
             inner = core.get(draft.sweep.heading_deg)
             if inner.pieces:
@@ -144,6 +152,33 @@ def meander(
             plan = _shortest(scene, [(estimated_length(scene, rows), base_sweep, rows, 1, "single-direction-cut",
                                       True)], base, allowed)
     return base if plan is None else plan
+
+
+def _passing(scene: Scene, spacing: float, inset: float) -> Passing | None:
+    """How our lines may pass the zones: they run on past a zone they only graze (the clearance kept: no turn is
+    made there), slide sideways by up to the inset (their band stays covered) or bend round it by up to `REACH`
+    spacings to do so."""
+    if not scene.has_zones:
+        return None
+    return Passing(scene.zones.buffer(scene.clearance, quad_segs=QUAD), inset, REACH * spacing, scene.radius)
+
+
+def _line_layouts(scene: Scene, spacing: float, inset: float, passing: Passing | None, heads: Array) -> list[Sweep]:
+    """The distinct sweeps to plan up to their tasks: per heading, the lines passing the zones as `passing` lets
+    them; over areas up to `ALTERNATIVE_AREA` (quick enough to plan) also without detours and cut at every zone they
+    come near, since running on past a zone does not always give the better cells."""
+    caches = [SweepCache(scene.region, scene.forbidden, spacing, inset, passing)]
+    if scene.area.area <= ALTERNATIVE_AREA:
+        straight = None if passing is None else Passing(passing.blocking, passing.shift)
+        caches += [SweepCache(scene.region, scene.forbidden, spacing, inset, straight),
+                   SweepCache(scene.region, scene.forbidden, spacing, inset)]
+    out: list[Sweep] = []
+    for h in heads:
+        for cache in caches:
+            sweep = cache.get(float(h))
+            if sweep.pieces and all(sweep.pieces != other.pieces for other in out):
+                out.append(sweep)
+    return out
 
 
 def _scale(scene: Scene) -> int:

@@ -64,7 +64,9 @@ def cell_tasks(scene: Scene, sweep: Sweep, tolerance: float, rings: Sequence[lis
     flown = common_lines(cells, sweep.heading_deg) + [seg for variants in rings for seg in variants[0].lines]
     residual = scene.free.difference(swept(flown, scene.swath))
     extra = [list(variants) for variants in rings]
-    extra += [[c, c.reversed()] for c in contour_runs(scene, residual, sweep.spacing, tolerance)]
+    # each stretch of ring needed is a task of its own: the ordering flies from one to the next where that is
+    # shortest, rather than along the ring between them
+    extra += [[c, c.reversed()] for c in contour_runs(scene, residual, sweep.spacing, tolerance, 0.0)]
     return Tasks(sweep, cells, extra)
 
 
@@ -130,7 +132,7 @@ def trimmed(scene: Scene, plan: Tasks, tolerance: float) -> Tasks:
         left = gap(cells)
         extra = plan.extra
         if left.area > budget and scene.has_zones:
-            top = contour_runs(scene, left, sweep.spacing, tolerance)
+            top = contour_runs(scene, left, sweep.spacing, tolerance, 0.0)
             if top:
                 left = left.difference(swept([seg for run in top for seg in run.lines], scene.swath))
                 extra = extra + [[run, run.reversed()] for run in top]
@@ -163,14 +165,33 @@ def trimmed_rows(scene: Scene, sweep: Sweep, runs: Sequence[Run], tolerance: flo
 
 
 def common_lines(tasks: list[list[Run]], heading_deg: float) -> list[Array]:
-    """Each cell's lines shortened to the part every variant of the cell flies."""
-    out = []
+    """Each cell's lines shortened to the part every variant of the cell flies.
+
+    The variants fly the same lines, some the other way round and some pulled back at their ends: the passes of
+    each are matched up as sweep-frame segments running along +u, in order of their ends' v and then along u (a
+    detour's straights, which every variant flies alike, match exactly)."""
+    out: list[Array] = []
     for variants in tasks:
-        forward = variants[0::2]
-        for j in range(len(forward[0].lines)):
-            uv = [to_sweep(run.lines[j], heading_deg) for run in forward]
-            lo = max(float(seg[:, 0].min()) for seg in uv)
-            hi = min(float(seg[:, 0].max()) for seg in uv)
+        legs = [_sweep_legs(run, heading_deg) for run in variants[0::2]]
+        if any(len(other) != len(legs[0]) for other in legs[1:]):      # an end pulled back to nothing: only the
+            out.extend(from_sweep(seg, heading_deg) for seg in legs[0]  # passes all variants fly alike are sure
+                       if all(any(np.array_equal(seg, o) for o in other) for other in legs[1:]))
+            continue
+        for group in zip(*legs, strict=True):
+            first = group[0]
+            if all(np.array_equal(seg, first) for seg in group[1:]):
+                out.append(from_sweep(first, heading_deg))
+                continue
+            lo = max(float(seg[0, 0]) for seg in group)
+            hi = min(float(seg[1, 0]) for seg in group)
             if hi > lo:
-                out.append(from_sweep(np.array([[lo, uv[0][0, 1]], [hi, uv[0][0, 1]]]), heading_deg))
+                out.append(from_sweep(np.array([[lo, first[0, 1]], [hi, first[0, 1]]]), heading_deg))
     return out
+
+
+def _sweep_legs(run: Run, heading_deg: float) -> list[Array]:
+    """The passes of `run` in the sweep frame, each running along +u, ordered by the v of its ends, then by u."""
+    legs = [to_sweep(seg, heading_deg) for seg in run.lines]
+    legs = [seg[::-1] if seg[1, 0] < seg[0, 0] else seg for seg in legs]
+    return sorted(legs, key=lambda seg: (round(float(seg[0, 1]), 6), round(float(seg[1, 1]), 6),
+                                         float(seg[:, 0].mean())))

@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 from shapely.geometry.base import BaseGeometry
 
 from .frames import from_sweep, to_sweep
-from .sweep import Piece, Sweep
+from .sweep import Sweep
 
 Array = NDArray[np.float64]
 
@@ -40,7 +40,7 @@ def trim_to_need(sweep: Sweep, need: BaseGeometry, covered: BaseGeometry | None 
     half = (0.5 - 1e-6) * sweep.spacing       # just inside the band, so that a touching neighbour adds nothing
     u0 = np.array([q.u0 for q in p])
     u1 = np.array([q.u1 for q in p])
-    v = np.array([q.v for q in p])
+    v = sweep.rows[[q.row for q in p]]                  # the bands' middles (a line may be shifted off it)
     v_lo, v_hi = v - half - _below(sweep), v + half + _above(sweep)
     corners = np.stack([np.stack([u0, v_lo], 1), np.stack([u1, v_lo], 1), np.stack([u1, v_hi], 1),
                         np.stack([u0, v_hi], 1)], axis=1)                           # (P, 4, 2) in the sweep frame
@@ -86,20 +86,23 @@ def trim_to_neighbours(sweep: Sweep, need: BaseGeometry, swath: float, sliver: f
     reach = 0.5 * (swath - s) * 0.95                       # a little under the neighbours' reach, for safety
     half = (0.5 - 1e-6) * s
     below, above = _below(sweep), _above(sweep)
+    mid = sweep.rows[[q.row for q in p]]                # the bands' middles (a line may be shifted off it)
     by_row: dict[int, list[int]] = {}
     for k, q in enumerate(p):
         by_row.setdefault(q.row, []).append(k)
     boxes: list[tuple[float, float, float, float]] = []
     owner: list[int] = []
     for k, q in enumerate(p):
-        boxes.append((q.u0, q.v - half + reach, q.u1, q.v + half - reach))             # the middle of the band
+        boxes.append((q.u0, mid[k] - half + reach, q.u1, mid[k] + half - reach))       # the middle of the band
         owner.append(k)
         for side in (1, -1):                                # the strips along the band's upper and lower edges
             if side > 0:
-                lo_v, hi_v = q.v + half - reach, q.v + half + float(above[k])
+                lo_v, hi_v = mid[k] + half - reach, mid[k] + half + float(above[k])
             else:
-                lo_v, hi_v = q.v - half - float(below[k]), q.v - half + reach
-            cover = sorted((p[m].u0, p[m].u1) for m in by_row.get(q.row + side, []))
+                lo_v, hi_v = mid[k] - half - float(below[k]), mid[k] - half + reach
+            # a neighbour shifted away from this band reaches less far into it: it is not counted on
+            cover = sorted((p[m].u0, p[m].u1) for m in by_row.get(q.row + side, [])
+                           if side * (p[m].v - mid[m]) <= 1e-9)
             at = q.u0
             for a, b in cover:
                 if b <= at or a >= q.u1:
@@ -147,5 +150,5 @@ def _with_extents(sweep: Sweep, extent: dict[int, tuple[float, float]]) -> Sweep
     keep = sorted(extent)
     new_id = {old: new for new, old in enumerate(keep)}
     links = tuple((new_id[a], new_id[b]) for a, b in sweep.links if a in new_id and b in new_id)
-    pieces = tuple(Piece(p[k].row, p[k].v, *extent[k]) for k in keep)
+    pieces = tuple(p[k].cut(*extent[k]) for k in keep)
     return Sweep(sweep.heading_deg, sweep.spacing, sweep.rows, pieces, links, sweep.inset)

@@ -11,7 +11,7 @@ from planners.coverage import coverage_fraction, meander
 from planners.coverage.contours import contour_rings, contour_runs
 from planners.coverage.metrics import swept
 from planners.coverage.scene import Scene
-from planners.coverage.sweep import build_sweep
+from planners.coverage.sweep import Passing, build_sweep
 from planners.coverage.trims import trim_to_need
 from planners.coverage.turns import dubins_path
 
@@ -81,3 +81,62 @@ def test_a_transit_round_a_zone_keeps_out_of_it_and_adds_little_to_the_route_bet
     routed = float(scene.router.lengths(p, q)[0, 0])
     flown = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
     assert routed <= flown <= routed + math.pi * 6.0
+
+
+SMALL = [[112, 180], [112, 200], [128, 200], [128, 180]]      # 20 m east × 16 m north, across the row at y ≈ 123.6
+
+
+def test_a_small_zone_across_a_line_is_bypassed_by_a_detour_and_needs_no_contour_pass():
+    # four rows (the outer ones stand in by the overlap) at y ≈ 29.2, 76.4, 123.6, 170.8: the third crosses the
+    # zone; 6.45 m north takes it 2.05 m clear of it (more than the 5.6 m a whole row may shift, less than the
+    # half spacing a detour may reach), so the line bends round the zone instead of stopping 8 m short of it
+    rect = [[0, 0], [0, 400], [200, 400], [200, 0]]
+    plan = meander(rect, [SMALL], spacing=SPACING, heading=90.0, turn_radius=6.0, swath=SWATH)
+    assert plan.cells == 1 and plan.turns == 3                   # one meander, no split, no transit
+    assert coverage_fraction(plan, rect, [SMALL], SWATH) >= 0.999
+    zone = shapely.Polygon([(e, n) for n, e in SMALL])
+    path = LineString(plan.waypoints[:, ::-1])
+    assert shapely.distance(path, zone) >= 2.0                    # the detour keeps the clearance
+    beside = shapely.get_coordinates(path.intersection(box(180, 100, 200, 150)))     # alongside the zone
+    assert len(beside) and np.allclose(beside[:, 1], 130.05)      # 2.05 m north of it, running east-west
+    # every pass runs east-west or is a straight of the detour, slanting at most 10°: none follows the zone round
+    for seg in plan.lines:
+        assert abs(seg[1, 0] - seg[0, 0]) <= abs(seg[1, 1] - seg[0, 1]) * math.tan(math.radians(10.0)) + 1e-6
+    assert circumradii(plan.waypoints).min() >= 0.95 * 6.0
+
+
+def circumradii(waypoints):
+    """Radius of the circle through each three consecutive waypoints (inf where they are collinear)."""
+    a, b, c = waypoints[:-2], waypoints[1:-1], waypoints[2:]
+    ab, bc, ca = (np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1), np.linalg.norm(a - c, axis=1))
+    cross = np.abs((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(cross < 1e-9, np.inf, ab * bc * ca / (2.0 * cross))
+
+
+def test_a_line_runs_on_past_a_zone_it_only_grazes_and_slides_clear_of_one_it_clips():
+    area = box(0, 0, 400, 100)                                   # rows at y = 25 and 75, lines running east
+
+    def rows(zone, shift):
+        forbidden = zone.buffer(8.0)                             # the standoff, R + clearance
+        passing = Passing(zone.buffer(2.0), shift=shift)         # the clearance
+        sweep = build_sweep(area.difference(forbidden), forbidden, 90.0, 50.0, passing=passing)
+        return [(p.row, round(p.v, 2), round(p.u0), round(p.u1)) for p in sweep.pieces]
+
+    # 3 m past the zone's edge: within the standoff, so a cut line would stop 8 m short of it on either side
+    assert rows(box(180, 78, 220, 95), 0.0) == [(0, 25.0, 0, 400), (1, 75.0, 0, 400)]
+    # 1 m into the zone's clearance: cut without a shift, one line 2.05 m south of the zone with a 5 m one
+    assert rows(box(180, 76, 220, 95), 0.0) == [(0, 25.0, 0, 400), (1, 75.0, 0, 172), (1, 75.0, 228, 400)]
+    assert rows(box(180, 76, 220, 95), 5.0) == [(0, 25.0, 0, 400), (1, 73.95, 0, 400)]
+
+
+def test_contour_passes_bridge_short_gaps_unless_asked_not_to():
+    scene = Scene.build(RECT, [HOLE], 6.0, 2.0, SWATH)
+    # two patches beside the zone's west side (the ring runs north at x = 142), 52 m apart along it
+    residual = box(136, 105, 141, 108).union(box(136, 160, 141, 163))
+    bridged = contour_runs(scene, residual, SPACING, 0.0)                # gaps under a spacing flown through
+    apart = contour_runs(scene, residual, SPACING, 0.0, bridge=0.0)      # each patch its own pass
+    assert len(bridged) == 1 and len(apart) == 2
+    assert sum(run.length for run in apart) < bridged[0].length - 10.0
+    for runs in (bridged, apart):
+        assert residual.difference(swept([seg for run in runs for seg in run.lines], SWATH)).area < 1e-6
