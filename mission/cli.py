@@ -167,7 +167,9 @@ def _vo(args: argparse.Namespace) -> int:
         raise AuvError(f"the visual-odometry package is not available: {exc}") from exc
     try:
         sequence = vo.read_kitti_sequence(args.sequence)
-        options = {} if args.method is None else {"method": args.method}
+        options: dict[str, Any] = {} if args.method is None else {"method": args.method}
+        if args.prefilter is not None:
+            options["prefilter_px"] = args.prefilter
         with tqdm(total=len(sequence), unit="frame", desc=f"vo {args.method or ''}".strip(), leave=False,
                   mininterval=0.5, disable=args.quiet, file=sys.stderr) as bar:
 
@@ -254,6 +256,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--format", choices=("kitti", "tum"), default="kitti", help="trajectory format (default kitti)")
     p.add_argument("--method", choices=("classic", "klt", "adaptive", "network"),
                    help="VO scheme (default: the VO package's)")
+    p.add_argument("--prefilter", type=float, metavar="PX",
+                   help="Gaussian low-pass σ (px) on the images, for noisy or dim cameras (default off)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_vo)
 

@@ -45,6 +45,7 @@ from mission.bench import REPO, check
 
 KITTI = REPO.parent / "shared" / "data" / "kitti06_0-50"
 EFFECTIVE_STEPS = (2, 4, 8, 16)
+PREFILTER = 1.5
 
 
 def _errors(gt: np.ndarray, est: np.ndarray) -> dict[str, Any]:
@@ -238,14 +239,19 @@ class _Blackout:
 def _robustness(quick: bool) -> dict[str, Any]:
     from mission.sim.camera import Degradations
     from mission.sim.stereo_sequence import SequenceRenderer, seabed_world, survey_trajectory
+    from perception_plugins.vo.se3 import invert, to_rotvec
 
     duration, fps = (3.2 if quick else 40.0), 25.0
     degradations = Degradations(noise_sigma=3.0, blur_sigma_px=1.2, falloff_range_m=5.0, turbidity_per_m=0.12)
     path = survey_trajectory(duration=duration, fps=fps, altitude=(3.5, 6.0), seed=2)
     seq = SequenceRenderer(seabed_world(texture="mud", scale=2.0, seed=4), path, _seabed_settings(), degradations)
     start, length = len(seq) // 2, int((0.4 if quick else 0.6) * fps)
-    runs = _lockstep(_Blackout(seq, start, length), {"klt": ("klt", {"step": 2}), "network": ("network", {"step": 2}),
-                                                     "adaptive": ("adaptive", {"fps": fps})})
+    specs: dict[str, tuple[str, dict[str, Any]]] = {
+        "klt": ("klt", {"step": 2}), "network": ("network", {"step": 2}), "adaptive": ("adaptive", {"fps": fps}),
+        # the low-pass for noisy cameras (`OdometerSettings.prefilter_px`, off by default): reported, not checked
+        "klt_prefilter_1.5": ("klt", {"step": 2, "prefilter_px": PREFILTER}),
+        "adaptive_prefilter_1.5": ("adaptive", {"fps": fps, "prefilter_px": PREFILTER})}
+    runs = _lockstep(_Blackout(seq, start, length), specs)
     seq.close()
     gt = _relative(seq.poses)
     table = _summarise(runs, gt, len(seq))
@@ -258,6 +264,13 @@ def _robustness(quick: bool) -> dict[str, Any]:
         table[name]["after_blackout_speed_error_percent"] = round(
             100 * float(abs(steps_est.sum() - steps_gt.sum()) / max(steps_gt.sum(), 1e-9)), 2)
         table[name]["finite"] = bool(np.all(np.isfinite(P)))
+        # the relative pose over the rest of the run: its translation error per metre travelled, and the attitude
+        # error it ends with (the odometer's own drift after recovering, which the summed distance cannot show)
+        T_gt, T_est = invert(gt[after.start]) @ gt[-1], invert(P[after.start]) @ P[-1]
+        table[name]["after_blackout_drift_percent"] = round(
+            100 * float(np.linalg.norm(T_gt[:3, 3] - T_est[:3, 3]) / max(steps_gt.sum(), 1e-9)), 2)
+        table[name]["after_blackout_attitude_error_deg"] = round(
+            float(np.degrees(np.linalg.norm(to_rotvec(T_gt[:3, :3].T @ T_est[:3, :3])))), 2)
     return {"conditions": {"degradations": {"noise_sigma": 3.0, "blur_sigma_px": 1.2, "falloff_range_m": 5.0,
                                             "turbidity_per_m": 0.12}, "texture": "mud, scale 2 (low texture)",
                            "blackout_frames": [start, start + length], "frames": len(seq), "fps": fps},
@@ -343,10 +356,11 @@ def checks_of(results: dict[str, Any]) -> dict[str, dict[str, Any]]:
     checks["seabed_adaptive_frames_reduction"] = check(av["frames_reduction"], ">= 3")
     checks["seabed_adaptive_error_ratio_to_base"] = check(av["mean_error_ratio"], "<= 1.5")
     checks["network_mean_error_ratio"] = check(results["network"]["mean_error_ratio"], ">= 1.5")
-    rob = results["robustness"]["methods"]
+    rob = {k: m for k, m in results["robustness"]["methods"].items() if k in ("klt", "network", "adaptive")}
     checks["robust_loss_rate_klt"] = check(rob["klt"]["loss_rate"], "<= 0.2")
     # Recovery: after the black-out every method tracks again, and the distance it measures over the rest of the
-    # run is right (a diverging odometer fails this; the drift accumulated during the black-out is reported).
+    # run is right. This does not catch a slow divergence: the attitude error and the drift of the relative pose
+    # over that stretch are reported beside it (KLT's attitude drifts by tens of degrees in the dark last third).
     checks["robust_speed_error_percent_after_blackout"] = check(
         max(m["after_blackout_speed_error_percent"] for m in rob.values()) if all(m["finite"] for m in rob.values())
         else math.inf, "<= 10")

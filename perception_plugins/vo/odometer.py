@@ -30,7 +30,7 @@ from perception_plugins.vo.adaptive import (
 from perception_plugins.vo.chain import Chain
 from perception_plugins.vo.classic import ClassicMatcher
 from perception_plugins.vo.errors import VoError
-from perception_plugins.vo.frontend import Array, Frontend, Step, flat_field
+from perception_plugins.vo.frontend import Array, Frontend, Step, prepare
 from perception_plugins.vo.klt import KltTracker
 from perception_plugins.vo.network import NetworkSettings, ReferenceNetwork
 from perception_plugins.vo.se3 import from_rotvec_translation, invert, to_rotvec
@@ -81,6 +81,11 @@ class OdometerSettings:
     moving with the vehicle breaks LK's brightness constancy otherwise (measured on the rendered seabed: long KLT's
     pitch drift per fragment −0.015° → +0.002°). The reference network binds on the images as pushed (its
     descriptor matching bound 1.7 cm off on flat-fielded ones, 0.2 cm on the originals). None: no flat field."""
+    prefilter_px: float | None = None
+    """A Gaussian low-pass of this σ (px) on the front ends' images after the flat field (`frontend.prepare`), for
+    noisy or dim cameras. Measured on the degraded mud run (noise σ 3, turbidity, lamp fall-off, 40 s): σ 1.5 cut
+    KLT's tracking losses 16 % → 1.8 % and the adaptive method's 32 % → 0 %, drift after a black-out 42 → 18 %
+    (KLT); on KITTI's sharp real images σ 1.0 raised KLT's end-point drift 0.84 → 1.14 %, so it is off by default."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -166,10 +171,10 @@ class Odometer:
         return len(self._buffer)
 
     def _prepared(self, frame: StereoImages) -> StereoImages:
-        sigma = self.settings.flat_field_px
-        if sigma is None:
+        flat, low = self.settings.flat_field_px, self.settings.prefilter_px
+        if flat is None and low is None:
             return frame
-        return replace(frame, left=flat_field(frame.left, sigma), right=flat_field(frame.right, sigma))
+        return replace(frame, left=prepare(frame.left, flat, low), right=prepare(frame.right, flat, low))
 
     # ---- steps --------------------------------------------------------------------------------------------------
     def _start(self, index: int, frame: StereoImages, raw: StereoImages) -> Estimate:
