@@ -257,7 +257,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", choices=("classic", "klt", "adaptive", "network"),
                    help="VO scheme (default: the VO package's)")
     p.add_argument("--prefilter", type=float, metavar="PX",
-                   help="Gaussian low-pass σ (px) on the images, for noisy or dim cameras (default off)")
+                   help="Gaussian low-pass σ (px) on the images (default 0.7; 0 turns it off)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_vo)
 

@@ -147,7 +147,7 @@ def test_plugin_rejects_an_unknown_method() -> None:
 def test_the_prefilter_option_reaches_the_odometer_and_tracking_stays_on_the_truth(survey: Sequence) -> None:
     plugin = StereoOdometryPlugin()
     plugin.configure({"method": "klt", "vo": {"prefilter_px": 1.5, "step": 2}})
-    assert plugin.settings.prefilter_px == 1.5 and settings_for("klt").prefilter_px is None
+    assert plugin.settings.prefilter_px == 1.5 and settings_for("klt").prefilter_px == 0.7
     results = [plugin.process(f, OdometryRequest()) for f in survey.frames]
     known = [k for k, r in enumerate(results) if r.ok and r.T_origin_cam is not None]
     assert len(known) >= len(results) // 2 - 1 and known[-1] >= len(results) - 3
