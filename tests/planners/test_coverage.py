@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 import shapely
 from shapely.geometry import LineString, Polygon
+from turning import circumradii
 
 from planners.coverage import (
     CoveragePlan,
@@ -26,15 +27,6 @@ SWATH = SPACING / 0.8                                       # 20 % overlap
 
 def zone_xy(zone):
     return Polygon([(e, n) for n, e in zone])
-
-
-def circumradii(waypoints):
-    """Radius of the circle through each three consecutive waypoints (inf where they are collinear)."""
-    a, b, c = waypoints[:-2], waypoints[1:-1], waypoints[2:]
-    ab, bc, ca = (np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1), np.linalg.norm(a - c, axis=1))
-    cross = np.abs((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(cross < 1e-9, np.inf, ab * bc * ca / (2.0 * cross))
 
 
 def test_swath_and_spacing_match_hand_numbers():

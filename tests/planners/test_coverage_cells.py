@@ -4,6 +4,7 @@ passes round the zones (headlands), the order of the tasks, and coverage of area
 import numpy as np
 import shapely
 from shapely.geometry import LineString, Polygon, box
+from turning import circumradii
 
 from planners.coverage import baseline_boustrophedon, coverage_fraction, meander
 from planners.coverage.baseline import single_direction_runs
@@ -23,14 +24,6 @@ BLOCK = [[150, 400], [150, 800], [450, 800], [450, 400]]    # splits the middle 
 
 def xy(poly):
     return Polygon([(e, n) for n, e in poly])
-
-
-def circumradii(points):
-    a, b, c = points[:-2], points[1:-1], points[2:]
-    ab, bc, ca = (np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1), np.linalg.norm(a - c, axis=1))
-    cross = np.abs((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(cross < 1e-9, np.inf, ab * bc * ca / (2.0 * cross))
 
 
 def test_a_line_whose_band_another_pass_covers_is_cut_back_or_dropped():

@@ -6,6 +6,7 @@ import math
 import numpy as np
 import shapely
 from shapely.geometry import LineString, box
+from turning import circumradii
 
 from planners.coverage import coverage_fraction, meander
 from planners.coverage.contours import contour_rings, contour_runs
@@ -103,15 +104,6 @@ def test_a_small_zone_across_a_line_is_bypassed_by_a_detour_and_needs_no_contour
     for seg in plan.lines:
         assert abs(seg[1, 0] - seg[0, 0]) <= abs(seg[1, 1] - seg[0, 1]) * math.tan(math.radians(10.0)) + 1e-6
     assert circumradii(plan.waypoints).min() >= 0.95 * 6.0
-
-
-def circumradii(waypoints):
-    """Radius of the circle through each three consecutive waypoints (inf where they are collinear)."""
-    a, b, c = waypoints[:-2], waypoints[1:-1], waypoints[2:]
-    ab, bc, ca = (np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1), np.linalg.norm(a - c, axis=1))
-    cross = np.abs((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(cross < 1e-9, np.inf, ab * bc * ca / (2.0 * cross))
 
 
 def test_a_line_runs_on_past_a_zone_it_only_grazes_and_slides_clear_of_one_it_clips():
