@@ -35,7 +35,7 @@ import statistics
 import subprocess
 import sys
 import time
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -64,8 +64,10 @@ def _relative(poses: np.ndarray) -> np.ndarray:
     return np.stack([invert(poses[0]) @ P for P in poses])
 
 
-def _lockstep(frames: Iterable[Any], specs: dict[str, tuple[str, dict[str, Any]]]) -> dict[str, Any]:
-    """Feed every frame once to one odometer per spec; poses of all frames, CPU seconds and stats per spec."""
+def _lockstep(frames: Iterable[Any], specs: dict[str, tuple[str, dict[str, Any]]],
+              views: dict[str, Callable[[int, Any], Any]] | None = None) -> dict[str, Any]:
+    """Feed every frame once to one odometer per spec (through the spec's `views` entry, when it has one: what that
+    odometer sees of frame i); poses of all frames, CPU seconds and stats per spec."""
     from perception_plugins.vo import Odometer, settings_for
     from perception_plugins.vo.se3 import fill_poses
 
@@ -76,8 +78,9 @@ def _lockstep(frames: Iterable[Any], specs: dict[str, tuple[str, dict[str, Any]]
     for i, frame in enumerate(frames):
         count = i + 1
         for name, od in odometers.items():
+            seen = views[name](i, frame) if views and name in views else frame
             t0 = time.process_time()
-            for e in od.push(i, frame):
+            for e in od.push(i, seen):
                 known[name][e.index] = e.T_origin_cam
             cpu[name] += time.process_time() - t0
     out: dict[str, Any] = {}
@@ -218,21 +221,19 @@ def _network(quick: bool) -> dict[str, Any]:
 
 
 class _Blackout:
-    """Frames of a sequence with a stretch replaced by featureless grey (a sediment cloud passing the lamp)."""
+    """A view of a sequence with frames [start, start + length) replaced by featureless grey (a sediment cloud
+    passing the lamp)."""
 
-    def __init__(self, frames: Any, start: int, length: int) -> None:
-        self.frames, self.start, self.length = frames, start, length
+    def __init__(self, start: int, length: int) -> None:
+        self.start, self.length = start, length
 
-    def __iter__(self) -> Any:
+    def __call__(self, i: int, frame: Any) -> Any:
         from mission.plugin_api import StereoImages
 
-        rng = np.random.default_rng(0)
-        for i, f in enumerate(self.frames):
-            if self.start <= i < self.start + self.length:
-                grey = np.clip(rng.normal(70, 2, f.left.shape), 0, 255).astype(np.uint8)
-                yield StereoImages(f.time, grey, grey.copy(), f.K, f.baseline)
-            else:
-                yield f
+        if not self.start <= i < self.start + self.length:
+            return frame
+        grey = np.clip(np.random.default_rng(i).normal(70, 2, frame.left.shape), 0, 255).astype(np.uint8)
+        return StereoImages(frame.time, grey, grey.copy(), frame.K, frame.baseline)
 
 
 def _robustness(quick: bool) -> dict[str, Any]:
@@ -245,12 +246,16 @@ def _robustness(quick: bool) -> dict[str, Any]:
     path = survey_trajectory(duration=duration, fps=fps, altitude=(3.5, 6.0), seed=2)
     seq = SequenceRenderer(seabed_world(texture="mud", scale=2.0, seed=4), path, _seabed_settings(), degradations)
     start, length = len(seq) // 2, int((0.4 if quick else 0.6) * fps)
-    specs: dict[str, tuple[str, dict[str, Any]]] = {
-        "klt": ("klt", {"step": 2}), "network": ("network", {"step": 2}), "adaptive": ("adaptive", {"fps": fps}),
-        # without the low-pass (`OdometerSettings.prefilter_px`): reported, not checked
-        "klt_without_prefilter": ("klt", {"step": 2, "prefilter_px": None}),
-        "adaptive_without_prefilter": ("adaptive", {"fps": fps, "prefilter_px": None})}
-    runs = _lockstep(_Blackout(seq, start, length), specs)
+    checked: dict[str, tuple[str, dict[str, Any]]] = {
+        "klt": ("klt", {"step": 2}), "network": ("network", {"step": 2}), "adaptive": ("adaptive", {"fps": fps})}
+    specs = {**checked,
+             # without the low-pass (`OdometerSettings.prefilter_px`): reported, not checked
+             "klt_without_prefilter": ("klt", {"step": 2, "prefilter_px": None}),
+             "adaptive_without_prefilter": ("adaptive", {"fps": fps, "prefilter_px": None}),
+             # the same odometers on the same frames without the black-out: what recovering means here
+             **{f"{name}_without_blackout": spec for name, spec in checked.items()}}
+    blackout = _Blackout(start, length)
+    runs = _lockstep(seq, specs, views={name: blackout for name in specs if not name.endswith("_without_blackout")})
     seq.close()
     gt = _relative(seq.poses)
     table = _summarise(runs, gt, len(seq))
@@ -270,10 +275,15 @@ def _robustness(quick: bool) -> dict[str, Any]:
             100 * float(np.linalg.norm(T_gt[:3, 3] - T_est[:3, 3]) / max(steps_gt.sum(), 1e-9)), 2)
         table[name]["after_blackout_attitude_error_deg"] = round(
             float(np.degrees(np.linalg.norm(to_rotvec(T_gt[:3, :3].T @ T_est[:3, :3])))), 2)
+    recovery = {name: {key: round(table[name][key] - table[f"{name}_without_blackout"][key], 2)
+                       for key in ("after_blackout_speed_error_percent", "after_blackout_drift_percent",
+                                   "after_blackout_attitude_error_deg")}
+                for name in checked}
     return {"conditions": {"degradations": {"noise_sigma": 3.0, "blur_sigma_px": 1.2, "falloff_range_m": 5.0,
                                             "turbidity_per_m": 0.12}, "texture": "mud, scale 2 (low texture)",
                            "blackout_frames": [start, start + length], "frames": len(seq), "fps": fps},
-            "methods": table}
+            "methods": table,
+            "excess_after_blackout": recovery}
 
 
 def _plugin(quick: bool) -> dict[str, Any]:
@@ -357,12 +367,16 @@ def checks_of(results: dict[str, Any]) -> dict[str, dict[str, Any]]:
     checks["network_mean_error_ratio"] = check(results["network"]["mean_error_ratio"], ">= 1.5")
     rob = {k: m for k, m in results["robustness"]["methods"].items() if k in ("klt", "network", "adaptive")}
     checks["robust_loss_rate_klt"] = check(rob["klt"]["loss_rate"], "<= 0.2")
-    # Recovery: after the black-out every method tracks again, and the distance it measures over the rest of the
-    # run is right. This does not catch a slow divergence: the attitude error and the drift of the relative pose
-    # over that stretch are reported beside it (KLT's attitude drifts by tens of degrees in the dark last third).
-    checks["robust_speed_error_percent_after_blackout"] = check(
-        max(m["after_blackout_speed_error_percent"] for m in rob.values()) if all(m["finite"] for m in rob.values())
-        else math.inf, "<= 10")
+    # Recovery: after the black-out every method tracks as it does over the same frames without the black-out (the
+    # drift per metre and the attitude error over the rest of the run within 2 points and 2°). The dark last third
+    # (6 m altitude, 5 m lamp range, turbid: the texture is under the noise at fine scales) makes every method drift
+    # with or without it; that absolute drift is reported in the methods' table, not checked.
+    excess = results["robustness"]["excess_after_blackout"]
+    finite = all(m["finite"] for m in rob.values())
+    checks["robust_excess_drift_points_after_blackout"] = check(
+        max(e["after_blackout_drift_percent"] for e in excess.values()) if finite else math.inf, "<= 2")
+    checks["robust_excess_attitude_error_deg_after_blackout"] = check(
+        max(e["after_blackout_attitude_error_deg"] for e in excess.values()) if finite else math.inf, "<= 2")
     checks["plugin_ms_per_frame_1200x900"] = check(results["plugin"]["ms_per_frame_cpu"]["median"], "<= 100")
     if results.get("quick"):
         # CPU seconds of the pinned child (rendering included): the wall clock of a machine shared with other

@@ -25,8 +25,8 @@ from perception_plugins.vo.trajectory import METHODS, settings_for
 
 _OPTION_KEYS = {"step", "fragment_steps", "fragment_rotation_deg", "calibrate_offset", "overlap_percent",
                 "max_step", "min_features", "min_track", "refresh_features", "features", "crop", "threshold_px",
-                "fps", "altitude", "prefilter_px", "reference_every", "bind_overlap", "bind_min_inliers",
-                "chain_margin", "formation_frames"}
+                "fps", "altitude", "prefilter_px", "tracking_lowpass_px", "reference_every", "bind_overlap",
+                "bind_min_inliers", "chain_margin", "formation_frames"}
 
 
 class StereoOdometryPlugin:

@@ -26,7 +26,7 @@ from .plan import CoveragePlan, assemble, estimated_length
 from .runs import Run
 from .scene import QUAD, Scene
 from .sweep import Passing, Sweep, SweepCache
-from .tasks import cell_tasks, order_tasks, trimmed, trimmed_rows, uncovered_area
+from .tasks import Tasks, cell_tasks, order_tasks, trimmed, trimmed_rows, uncovered_area
 
 Array = NDArray[np.float64]
 # estimated length, sweep, runs in flying order, cells, method, whether its coverage must be checked
@@ -34,11 +34,14 @@ Option = tuple[float, Sweep, list[Run], int, str, bool]
 SHORTLIST = 2
 FULL_PLANS = 2         # line directions ordered in full
 SMALL_AREA = 0.5e6     # m²: areas this small plan quickly, and try twice as many line directions
-ALTERNATIVE_AREA = 2.5e6   # m²: areas this small also try their lines cut at every zone (larger ones take too long)
+ALTERNATIVE_AREA = 2.5e6   # m²: areas this small also try their lines without detours, and slid (larger ones
+                           # take too long)
 HEADLAND_PLANS = 1     # of which also planned in the headland layout (more gained nothing measurable)
 SLIVER, FINE_SLIVER = 1e-3, 1e-5   # parts of a band (in spacing²) a cut line may give up
 INSET = 0.9            # share of the swath's overlap reach by which the outermost lines stand in
 REACH = 0.5            # spacings by which a line may bend aside round a zone (more gained nothing measurable)
+PHASES = (0.0, 1.0)    # where the grid of lines is also slid to: either end of its slack (`build_sweep` phase)
+SLID = 1               # most promising line directions also laid out with their grid slid (three over small areas)
 
 
 def meander(
@@ -63,7 +66,8 @@ def meander(
     `clearance`, and no part of the path comes closer to a zone than half the clearance. Our lines need not stop
     at a zone they do not cross by the clearance (no turn is made there): they run on past it, slid sideways by up
     to the overlap they have to spare, or bent round it on Dubins ramps by up to half a spacing (`sweep.Passing`);
-    over areas up to 2.5 km² the lines cut at every zone are planned too, and the shorter plan wins.
+    over areas up to 2.5 km² the lines without detours are planned too, and the shorter plan wins. (Lines cut at
+    every zone they come near, once planned too, gained nothing measurable.)
 
     Where no-go zones (or bays of the boundary) split the lines, the free area is decomposed into boustrophedon
     cells, each flown as its own meander, and the cells, their start corners and directions are ordered to
@@ -86,6 +90,12 @@ def meander(
     is within 2 % of it is flown in full, and the shortest no longer than it is returned; if there is none, that
     sweep with its lines cut back the same way ("single-direction-cut", coarser cuts first) if it is shorter, else
     the single-direction plan itself (`method` tells which).
+
+    Over areas up to 2.5 km² with zones, the most promising direction (three over small areas) is also laid out
+    with its rows a full spacing apart and the grid slid to either end of its slack, so that a zone may fall
+    between two lines instead of splitting one (`build_sweep` phase). Those drafts compete for the places to be
+    ordered in full, though the best unslid one (over larger areas, the two best) keeps its place whatever, and a
+    plan from one is kept only if its coverage holds (its outermost lines stand in further).
 
     >>> plan = meander([[0, 0], [0, 400], [100, 400], [100, 0]], spacing=25.0, turn_radius=5.0)
     >>> plan.heading_deg, len(plan.lines), plan.turns, plan.cells
@@ -118,9 +128,16 @@ def meander(
     inset = max(0.0, INSET * 0.5 * (scene.swath - spacing))
     passing = _passing(scene, spacing, inset)
     lined = _line_layouts(scene, spacing, inset, passing, heads)
-    drafts = sorted((cell_tasks(scene, sw, fill_tolerance) for sw in lined),
-                    key=lambda t: t.rough_length())[:FULL_PLANS * _scale(scene)]
-    layouts = [(draft, False) for draft in drafts]
+    ranked = sorted((cell_tasks(scene, sw, fill_tolerance) for sw in lined), key=Tasks.rough_length)
+    slid: list[Tasks] = []
+    small = scene.area.area <= SMALL_AREA
+    if scene.has_zones and ranked and scene.area.area <= ALTERNATIVE_AREA:
+        count = 3 * SLID if small else SLID
+        slid = [cell_tasks(scene, sw, fill_tolerance)
+                for sw in _slid_layouts(scene, spacing, inset, passing, _directions(ranked, count))]
+    # (draft, whether its coverage must be checked)
+    layouts = _drafts(ranked, slid, FULL_PLANS * _scale(scene), 1 if small else FULL_PLANS)
+    drafts = [draft for draft, _ in layouts]
     rings = headland_tasks(scene)
     if rings and drafts:
         core = SweepCache(core_region(scene, [variants[0] for variants in rings]), scene.forbidden, spacing, inset,
@@ -130,14 +147,14 @@ def meander(
             if inner.pieces:
                 layouts.append((cell_tasks(scene, inner, fill_tolerance, rings), True))
     options: list[Option] = []
-    for draft, headland in layouts:
+    for draft, check in layouts:
         tasks = trimmed(scene, draft, fill_tolerance)
         runs = order_tasks(scene, tasks.all, s_xy, f_xy)
         options.append((estimated_length(scene, runs), tasks.sweep, runs, len(tasks.cells), "boustrophedon-cells",
-                        headland))
-    # the contour passes fill what the cells' lines leave to the tolerance; plans built otherwise (round rings, cut
-    # single-direction rows) may leave no more uncovered than the tolerance or, if that leaves more, than the
-    # single-direction plan does
+                        check))
+    # the contour passes fill what the cells' lines leave to the tolerance; plans built otherwise (round rings, a
+    # slid line grid, cut single-direction rows) may leave no more uncovered than the tolerance or, if that leaves
+    # more, than the single-direction plan does
     def allowed() -> float:
         return max(fill_tolerance * scene.free.area, uncovered_area(scene, base_runs)) + 1e-6
 
@@ -165,13 +182,12 @@ def _passing(scene: Scene, spacing: float, inset: float) -> Passing | None:
 
 def _line_layouts(scene: Scene, spacing: float, inset: float, passing: Passing | None, heads: Array) -> list[Sweep]:
     """The distinct sweeps to plan up to their tasks: per heading, the lines passing the zones as `passing` lets
-    them; over areas up to `ALTERNATIVE_AREA` (quick enough to plan) also without detours and cut at every zone they
-    come near, since running on past a zone does not always give the better cells."""
+    them; over areas up to `ALTERNATIVE_AREA` (quick enough to plan) also without detours, since bending round a
+    zone does not always give the better cells."""
     caches = [SweepCache(scene.region, scene.forbidden, spacing, inset, passing)]
     if scene.area.area <= ALTERNATIVE_AREA:
         straight = None if passing is None else Passing(passing.blocking, passing.shift)
-        caches += [SweepCache(scene.region, scene.forbidden, spacing, inset, straight),
-                   SweepCache(scene.region, scene.forbidden, spacing, inset)]
+        caches.append(SweepCache(scene.region, scene.forbidden, spacing, inset, straight))
     out: list[Sweep] = []
     for h in heads:
         for cache in caches:
@@ -179,6 +195,49 @@ def _line_layouts(scene: Scene, spacing: float, inset: float, passing: Passing |
             if sweep.pieces and all(sweep.pieces != other.pieces for other in out):
                 out.append(sweep)
     return out
+
+
+def _slid_layouts(scene: Scene, spacing: float, inset: float, passing: Passing | None,
+                  sweeps: Sequence[Sweep]) -> list[Sweep]:
+    """The directions of `sweeps` with their rows a full spacing apart and the grid slid to either end of its
+    slack (`PHASES`, see `build_sweep`): a zone that falls between two lines splits none. Only those differing
+    from `sweeps` and from each other."""
+    out: list[Sweep] = []
+    for phase in PHASES:
+        cache = SweepCache(scene.region, scene.forbidden, spacing, inset, passing, phase)
+        for sweep in sweeps:
+            slid = cache.get(sweep.heading_deg)
+            if slid.pieces and all(slid.pieces != other.pieces for other in [*sweeps, *out]):
+                out.append(slid)
+    return out
+
+
+def _directions(ranked: list[Tasks], count: int) -> list[Sweep]:
+    """The sweeps of the first `count` distinct line directions among the `ranked` drafts."""
+    out: list[Sweep] = []
+    for draft in ranked:
+        if len(out) == count:
+            break
+        if all(abs(draft.sweep.heading_deg - other.heading_deg) > 1e-9 for other in out):
+            out.append(draft.sweep)
+    return out
+
+
+def _drafts(ranked: list[Tasks], slid: list[Tasks], count: int, kept: int) -> list[tuple[Tasks, bool]]:
+    """The `count` drafts of least rough length among the `ranked` ones (sorted) and the `slid` ones, each with
+    whether it is slid, plus any of the best `kept` ranked ones they displace: a rough length misjudges the cut
+    lines and the order, and a slid grid that looks better need not be.
+
+    >>> from types import SimpleNamespace as Draft
+    >>> a, b, c, d = (Draft(rough_length=lambda x=x: x) for x in (1.0, 2.0, 3.0, 1.5))
+    >>> [(t.rough_length(), s) for t, s in _drafts([a, b, c], [d], 2, 2)]      # d displaces b, which is kept
+    [(1.0, False), (1.5, True), (2.0, False)]
+    >>> [(t.rough_length(), s) for t, s in _drafts([a, b, c], [d], 2, 1)]
+    [(1.0, False), (1.5, True)]
+    """
+    pool = sorted([(d, False) for d in ranked] + [(d, True) for d in slid], key=lambda t: t[0].rough_length())
+    top = pool[:count]
+    return top + [(d, False) for d in ranked[:kept] if all(d is not other for other, _ in top)]
 
 
 def _scale(scene: Scene) -> int:

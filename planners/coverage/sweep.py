@@ -78,8 +78,9 @@ class Sweep:
     rows: Array
     pieces: tuple[Piece, ...]                      # sorted by row, then u
     links: tuple[tuple[int, int], ...]             # (lower, upper) pieces whose band slices touch
-    inset: float = 0.0                             # how far the outermost bands reach beyond their spacing-wide
-                                                   # share (their lines' swaths cover it)
+    reach: tuple[float, float] = (0.0, 0.0)        # how far the first band reaches below, and the last above,
+                                                   # their spacing-wide share (their lines' swaths cover it; < 0
+                                                   # where the share overhangs the region)
 
     def points(self, u: Array, v: Array) -> Array:
         """(x, y) of sweep-frame points."""
@@ -253,7 +254,7 @@ def _detour(forb: BaseGeometry, passing: Passing, v: float, a0: float, a: float,
 
 
 def build_sweep(region: BaseGeometry, forbidden: BaseGeometry, heading_deg: float, spacing: float,
-                inset: float = 0.0, passing: Passing | None = None) -> Sweep:
+                inset: float = 0.0, passing: Passing | None = None, phase: float | None = None) -> Sweep:
     """Survey lines of `heading_deg` covering `region` (x, y), clipped by `forbidden`, at most `spacing` apart.
 
     With `passing` (see `Passing`), a line is cut only where it would cross `passing.blocking` (inside
@@ -267,6 +268,12 @@ def build_sweep(region: BaseGeometry, forbidden: BaseGeometry, heading_deg: floa
     With `inset`, the bands are laid over the region less `inset` at either side across the lines, and the
     outermost bands reach over that margin too: a swath wider than the spacing by 2·`inset` still covers it, and
     fewer lines may fit.
+
+    With `phase` in [0, 1], the rows are a full `spacing` apart (as many of them) and so span more than the
+    region; the grid slides across the lines by that share of the excess: at 0 the first band starts where it
+    would anyway and the last overhangs the region, at 1 the other way round (an outermost line may then lie just
+    outside the region; its swath still reaches the edge). A zone may then fall between two lines rather than
+    split one.
 
     >>> from shapely.geometry import box
     >>> zone = box(150, 30, 250, 70)
@@ -291,8 +298,18 @@ def build_sweep(region: BaseGeometry, forbidden: BaseGeometry, heading_deg: floa
     height = vmax - vmin - 2.0 * inset
     n = max(1, math.ceil(height / spacing - 1e-9))
     step = height / n if height > 0 else spacing
-    edges = vmin + inset + step * np.arange(n + 1)
-    edges[-1] = vmax - inset
+    shift = 0.0
+    if phase is not None and height > 0:
+        # a full spacing apart where the outermost lines stay within the region's extent, else as close to it as
+        # lets them (the bands' shares overhang by `over` in all)
+        over, step = n * spacing - height, spacing
+        if over > inset + 0.5 * spacing:
+            step = (height + inset) / (n - 0.5)
+            over = inset + 0.5 * step
+        shift = -phase * over
+    edges = vmin + inset + shift + step * np.arange(n + 1)
+    if phase is None:
+        edges[-1] = vmax - inset
     rows = 0.5 * (edges[:-1] + edges[1:])
     lower, upper = edges[:-1].copy(), edges[1:].copy()
     lower[0], upper[-1] = vmin, vmax
@@ -347,24 +364,26 @@ def build_sweep(region: BaseGeometry, forbidden: BaseGeometry, heading_deg: floa
                         continue
                     if any((x, y) in touching for x in piece_comps[p] for y in piece_comps[q]):
                         links.append((p, q))
-    return Sweep(heading_deg, step, rows, tuple(pieces), tuple(links), inset)
+    return Sweep(heading_deg, step, rows, tuple(pieces), tuple(links),
+                 (float(edges[0] - vmin), float(vmax - edges[-1])))
 
 
 class SweepCache:
     """Sweeps of one scene at one spacing, built once per heading."""
 
     def __init__(self, region: BaseGeometry, forbidden: BaseGeometry, spacing: float, inset: float = 0.0,
-                 passing: Passing | None = None):
+                 passing: Passing | None = None, phase: float | None = None):
         self.region = region
         self.forbidden = forbidden
         self.spacing = spacing
         self.inset = inset
         self.passing = passing
+        self.phase = phase
         self._built: dict[float, Sweep] = {}
 
     def get(self, heading_deg: float) -> Sweep:
         key = round(float(heading_deg) % 180.0, 9)
         if key not in self._built:
             self._built[key] = build_sweep(self.region, self.forbidden, key, self.spacing, self.inset,
-                                            self.passing)
+                                            self.passing, self.phase)
         return self._built[key]

@@ -134,14 +134,14 @@ def trim_to_neighbours(sweep: Sweep, need: BaseGeometry, swath: float, sliver: f
 
 
 def _below(sweep: Sweep) -> Array:
-    """How far each piece's band reaches below its spacing-wide share (the first row's reaches over the inset)."""
-    return np.array([sweep.inset if q.row == 0 else 0.0 for q in sweep.pieces])
+    """How far each piece's band reaches below its spacing-wide share (the first row's by `Sweep.reach`)."""
+    return np.array([sweep.reach[0] if q.row == 0 else 0.0 for q in sweep.pieces])
 
 
 def _above(sweep: Sweep) -> Array:
-    """How far each piece's band reaches above its spacing-wide share (the last row's reaches over the inset)."""
+    """How far each piece's band reaches above its spacing-wide share (the last row's by `Sweep.reach`)."""
     last = len(sweep.rows) - 1
-    return np.array([sweep.inset if q.row == last else 0.0 for q in sweep.pieces])
+    return np.array([sweep.reach[1] if q.row == last else 0.0 for q in sweep.pieces])
 
 
 def _with_extents(sweep: Sweep, extent: dict[int, tuple[float, float]]) -> Sweep:
@@ -151,4 +151,4 @@ def _with_extents(sweep: Sweep, extent: dict[int, tuple[float, float]]) -> Sweep
     new_id = {old: new for new, old in enumerate(keep)}
     links = tuple((new_id[a], new_id[b]) for a, b in sweep.links if a in new_id and b in new_id)
     pieces = tuple(p[k].cut(*extent[k]) for k in keep)
-    return Sweep(sweep.heading_deg, sweep.spacing, sweep.rows, pieces, links, sweep.inset)
+    return Sweep(sweep.heading_deg, sweep.spacing, sweep.rows, pieces, links, sweep.reach)

@@ -89,3 +89,18 @@ def test_long_klt_tracking_follows_the_kitti_car_within_two_percent() -> None:
     # rotations to 0.1°; on this clip independent front ends agree with each other and differ from poses.txt by ~1°).
     R_err = poses[-1, :3, :3].T @ gt[-1, :3, :3]
     assert np.degrees(np.arccos(np.clip((np.trace(R_err) - 1) / 2, -1, 1))) < 1.5
+
+
+@pytest.mark.skipif(not KITTI.exists(), reason="KITTI clip not present (../shared/data/kitti06_0-50)")
+def test_a_road_scene_spans_the_depths_that_calibrate_the_disparity_offset() -> None:
+    from perception_plugins.vo import Odometer, run_odometer, settings_for
+    from perception_plugins.vo.klt import KltTracker, offset_observable
+
+    seq = read_kitti_sequence(KITTI)
+    odometer = Odometer(settings_for("klt"))
+    run_odometer([seq[i] for i in range(21)], odometer)
+    tracker = odometer.frontend
+    assert isinstance(tracker, KltTracker) and offset_observable(tracker.key_points[:, 2])
+    # Road, cars and facades at many depths: the fragments estimate the offset, and the median is in use from the
+    # third estimate on.
+    assert len(tracker.offsets) >= 3 and tracker.doffs == pytest.approx(float(np.median(tracker.offsets)))

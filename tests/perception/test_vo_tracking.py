@@ -153,3 +153,37 @@ def test_the_prefilter_option_reaches_the_odometer_and_tracking_stays_on_the_tru
     assert len(known) >= len(results) // 2 - 1 and known[-1] >= len(results) - 3
     last = results[known[-1]].T_origin_cam
     assert last is not None and np.linalg.norm(last[:3, 3] - survey.gt[known[-1], :3, 3]) < 0.01 * survey.path
+
+
+def test_the_disparity_offset_is_calibrated_only_where_depths_tell_it_from_scale(survey: Sequence) -> None:
+    from perception_plugins.vo.klt import KltTracker
+
+    # Over the seabed the depths span a factor well under 2.5: the offset would trade against the translation's
+    # scale, so the pair keeps its calibrated offset (0, which is the truth for the renderer).
+    odometer = Odometer(settings_for("klt", step=2, fragment_steps=4))
+    run_odometer(survey.frames, odometer)
+    assert isinstance(odometer.frontend, KltTracker)
+    assert odometer.frontend.offsets == [] and odometer.frontend.doffs == 0.0
+    # Asked to calibrate from any depth spread, the fragments do estimate offsets, each small against the truth.
+    eager = Odometer(settings_for("klt", step=2, fragment_steps=4))
+    assert isinstance(eager.frontend, KltTracker)
+    eager.frontend.offset_depth_ratio = 1.0
+    run_odometer(survey.frames, eager)
+    assert len(eager.frontend.offsets) >= 8 and abs(float(np.median(eager.frontend.offsets))) < 0.3
+
+
+def test_lk_tracks_across_time_on_images_low_passed_to_the_setting(survey: Sequence) -> None:
+    from perception_plugins.vo.klt import KltTracker
+
+    default = Odometer(settings_for("klt"))
+    assert isinstance(default.frontend, KltTracker)
+    assert default.frontend.track_blur_px == pytest.approx(math.sqrt(1.5**2 - 0.7**2))  # variances add
+    plugin = StereoOdometryPlugin()
+    plugin.configure({"method": "klt", "vo": {"tracking_lowpass_px": None, "step": 2}})
+    assert plugin.settings.tracking_lowpass_px is None
+    # Without the extra low-pass the tracker still follows the truth over this short pass.
+    results = [plugin.process(f, OdometryRequest()) for f in survey.frames]
+    known = [k for k, r in enumerate(results) if r.ok and r.T_origin_cam is not None]
+    assert known[-1] >= len(results) - 3
+    last = results[known[-1]].T_origin_cam
+    assert last is not None and np.linalg.norm(last[:3, 3] - survey.gt[known[-1], :3, 3]) < 0.01 * survey.path

@@ -4,6 +4,7 @@
 import math
 
 import numpy as np
+import pytest
 import shapely
 from shapely.geometry import LineString, box
 from turning import circumradii
@@ -53,8 +54,12 @@ def test_the_rectangle_with_a_square_zone_is_covered_and_the_path_keeps_out_of_t
     assert shapely.distance(LineString(plan.waypoints[:, ::-1]), zone) >= 0.9    # half the 2 m clearance, rounded
     east_west = [seg for seg in plan.lines if abs(seg[0, 0] - seg[1, 0]) < 1e-6]
     assert len(east_west) >= 6                                                   # the survey lines
-    for seg in east_west:                                                        # end at the standoff, R + clearance
-        assert shapely.distance(LineString(seg[:, ::-1]), zone) >= 8.0 - 0.5
+    for seg in east_west:
+        gap = shapely.distance(LineString(seg[:, ::-1]), zone)
+        if 100.0 < seg[0, 0] < 200.0:                                            # cut at the zone: they end at the
+            assert gap >= 8.0 - 0.5                                              # standoff, R + clearance
+        else:                                                                    # run or bend past it (a slid grid
+            assert gap >= 2.0                                                    # may pass it): the clearance
 
 
 def test_a_finer_sliver_keeps_the_small_parts_of_a_band_a_coarser_one_gives_up():
@@ -120,6 +125,39 @@ def test_a_line_runs_on_past_a_zone_it_only_grazes_and_slides_clear_of_one_it_cl
     # 1 m into the zone's clearance: cut without a shift, one line 2.05 m south of the zone with a 5 m one
     assert rows(box(180, 76, 220, 95), 0.0) == [(0, 25.0, 0, 400), (1, 75.0, 0, 172), (1, 75.0, 228, 400)]
     assert rows(box(180, 76, 220, 95), 5.0) == [(0, 25.0, 0, 400), (1, 73.95, 0, 400)]
+
+
+
+def test_a_slid_line_grid_lets_a_zone_fall_between_two_lines():
+    area = box(0, 0, 400, 110)                                   # 30 m spacing: four rows, lines running east
+    zone = box(150, 62, 250, 72)
+
+    def rows(phase):
+        sweep = build_sweep(area.difference(zone), zone, 90.0, 30.0, phase=phase)
+        return sweep, [(p.row, round(p.v, 2), round(p.u0), round(p.u1)) for p in sweep.pieces]
+
+    # rounded to whole rows, 27.5 m apart: the row at y = 68.75 crosses the zone and splits
+    sweep, pieces = rows(None)
+    assert sweep.spacing == pytest.approx(27.5) and sweep.reach == (0.0, 0.0)
+    assert [p[:2] for p in pieces] == [(0, 13.75), (1, 41.25), (2, 68.75), (2, 68.75), (3, 96.25)]
+    # a full 30 m apart, the four rows span 120 m, 10 m beyond the area: slid to the south end of that slack the
+    # zone (y 62…72) falls between the rows at y = 45 and 75 and splits none; the last band's share overhangs the
+    # area by 10 m, and its line (at y = 105, inside the area) covers the band's 20 m within it
+    sweep, pieces = rows(0.0)
+    assert sweep.spacing == pytest.approx(30.0) and sweep.reach == pytest.approx((0.0, -10.0))
+    assert pieces == [(0, 15.0, 0, 400), (1, 45.0, 0, 400), (2, 75.0, 0, 400), (3, 105.0, 0, 400)]
+    # slid to the north end, the row at y = 65 splits
+    sweep, pieces = rows(1.0)
+    assert sweep.reach == pytest.approx((-10.0, 0.0))
+    assert [p[:2] for p in pieces] == [(0, 5.0), (1, 35.0), (2, 65.0), (2, 65.0), (3, 95.0)]
+
+
+def test_a_slid_line_grid_keeps_its_outermost_lines_within_the_area():
+    # 100 m across at 30 m: a full-spacing grid would overhang by 20 m and put a line 5 m outside; the rows close
+    # up instead (100 / 3.5 m apart), so that the outermost line runs along the area's edge
+    sweep = build_sweep(box(0, 0, 400, 100), box(0, 0, 0, 0), 90.0, 30.0, phase=0.0)
+    assert sweep.spacing == pytest.approx(100 / 3.5)
+    assert [round(p.v, 2) for p in sweep.pieces] == [14.29, 42.86, 71.43, 100.0]
 
 
 def test_contour_passes_bridge_short_gaps_unless_asked_not_to():
