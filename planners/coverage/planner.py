@@ -34,6 +34,7 @@ Option = tuple[float, Sweep, list[Run], int, str, bool]
 SHORTLIST = 2
 FULL_PLANS = 2         # line directions ordered in full
 SMALL_AREA = 0.5e6     # m²: areas this small plan quickly, and try twice as many line directions
+TINY_AREA = 0.12e6     # m²: areas this small also order two more drafts in full
 ALTERNATIVE_AREA = 2.5e6   # m²: areas this small also try their lines without detours, and slid (larger ones
                            # take too long)
 HEADLAND_PLANS = 1     # of which also planned in the headland layout (more gained nothing measurable)
@@ -71,7 +72,8 @@ def meander(
 
     Where no-go zones (or bays of the boundary) split the lines, the free area is decomposed into boustrophedon
     cells, each flown as its own meander, and the cells, their start corners and directions are ordered to
-    minimise the transits (exactly while the tasks and their variants are few, greedy + 2-opt + or-opt beyond);
+    minimise the transits plus the meanders as flown (exactly while the tasks and their variants are few, beyond
+    greedy tours from every variant, the best few refined by 2-opt + or-opt);
     transits route round the zones. Turns are Dubins paths of radius `turn_radius`: U-turns when lines are at
     least 2R apart, Ω-turns otherwise. Passes along the zones' boundaries are added where the lines leave more
     than `fill_tolerance` of the free area uncovered by a swath of `swath` (default: the spacing). The path
@@ -85,7 +87,8 @@ def meander(
     `heading="auto"` tries the directions of the boundary edges and a 2° grid, scores them in closed form by
     number of lines (turns) and then length, and plans the best two and the single-direction sweep's heading up to
     their cells and contour passes; the two shortest of those are cut back and ordered in full (the best also in
-    the headland layout). Areas up to 0.5 km², quick to plan, get twice as many directions at both stages. The
+    the headland layout). Areas up to 0.5 km², quick to plan, get twice as many directions at both stages (up to
+    0.12 km², two more ordered in full). The
     best single-direction boustrophedon (`baseline_boustrophedon`) is planned too: every cell plan whose estimate
     is within 2 % of it is flown in full, and the shortest no longer than it is returned; if there is none, that
     sweep with its lines cut back the same way ("single-direction-cut", coarser cuts first) if it is shorter, else
@@ -136,7 +139,7 @@ def meander(
         slid = [cell_tasks(scene, sw, fill_tolerance)
                 for sw in _slid_layouts(scene, spacing, inset, passing, _directions(ranked, count))]
     # (draft, whether its coverage must be checked)
-    layouts = _drafts(ranked, slid, FULL_PLANS * _scale(scene), 1 if small else FULL_PLANS)
+    layouts = _drafts(ranked, slid, _full_plans(scene), 1 if small else FULL_PLANS)
     drafts = [draft for draft, _ in layouts]
     rings = headland_tasks(scene)
     if rings and drafts:
@@ -238,6 +241,12 @@ def _drafts(ranked: list[Tasks], slid: list[Tasks], count: int, kept: int) -> li
     pool = sorted([(d, False) for d in ranked] + [(d, True) for d in slid], key=lambda t: t[0].rough_length())
     top = pool[:count]
     return top + [(d, False) for d in ranked[:kept] if all(d is not other for other, _ in top)]
+
+
+def _full_plans(scene: Scene) -> int:
+    """How many drafts to cut back and order in full: `FULL_PLANS`, twice as many over small areas and two more
+    over tiny ones (quick to plan)."""
+    return FULL_PLANS * _scale(scene) + (2 if scene.area.area <= TINY_AREA else 0)
 
 
 def _scale(scene: Scene) -> int:

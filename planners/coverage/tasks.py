@@ -73,7 +73,8 @@ def cell_tasks(scene: Scene, sweep: Sweep, tolerance: float, rings: Sequence[lis
 def order_tasks(scene: Scene, tasks: Sequence[list[Run]], start: Array | None = None,
                 finish: Array | None = None) -> list[Run]:
     """One variant of every task, in flying order, minimising the transits plus the approach from `start` and the
-    way to `finish` (x, y)."""
+    way to `finish` (x, y), plus the variants' own lengths (a cell's meanders from either side differ in their
+    turns and line ends: each counts half on the way in, half on the way out)."""
     runs: list[Run] = [r for variants in tasks for r in variants]
     task_of = np.array([t for t, variants in enumerate(tasks) for _ in variants], dtype=np.int64)
     reverse_of = np.arange(len(runs), dtype=np.int64) ^ 1           # variants come in (forward, backward) pairs
@@ -86,7 +87,9 @@ def order_tasks(scene: Scene, tasks: Sequence[list[Run]], start: Array | None = 
         scene.router.lengths(start, entries)[0], np.linalg.norm(entries - start, axis=1))
     finish_cost = np.zeros(len(runs)) if finish is None else _reachable(
         scene.router.lengths(exits, finish)[:, 0], np.linalg.norm(exits - finish, axis=1))
-    order = order_variants(task_of, reverse_of, cost, start_cost, finish_cost)
+    half = 0.5 * np.array([r.length for r in runs])
+    order = order_variants(task_of, reverse_of, cost + half[:, None] + half[None, :], start_cost + half,
+                           finish_cost + half)
     return [runs[v] for v in order]
 
 

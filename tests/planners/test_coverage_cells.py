@@ -11,9 +11,11 @@ from planners.coverage.baseline import single_direction_runs
 from planners.coverage.headlands import core_region, headland_rings, headland_tasks
 from planners.coverage.metrics import swept
 from planners.coverage.ordering import order_variants, tour_cost
+from planners.coverage.planner import _full_plans
+from planners.coverage.runs import Run
 from planners.coverage.scene import Scene
 from planners.coverage.sweep import build_sweep
-from planners.coverage.tasks import cell_tasks, common_lines, trimmed, trimmed_rows
+from planners.coverage.tasks import cell_tasks, common_lines, order_tasks, trimmed, trimmed_rows
 from planners.coverage.trims import trim_to_need, trim_to_neighbours
 
 SPACING = 50.0
@@ -130,6 +132,46 @@ def test_large_orderings_fall_back_to_the_heuristic_and_still_fly_every_task_onc
         nearest, cost, np.zeros(len(pts)), np.zeros(len(pts)))
 
 
+def test_the_heuristic_ordering_finds_the_line_of_tasks_from_its_far_end():
+    # 14 tasks on a line 100 m apart, each a single point flown either way: the exact search is too big, a
+    # nearest-neighbour tour from task 0 (in the middle) zigzags; the best tour runs from one end to the other
+    n_tasks = 14
+    x = np.array([0, 7, 6, 8, 5, 9, 4, 10, 3, 11, 2, 12, 1, 13], dtype=float) * 100.0
+    pts = np.repeat(np.stack([x, np.zeros(n_tasks)], axis=1), 2, axis=0)
+    cost = np.linalg.norm(pts[:, None] - pts[None], axis=2)
+    task_of = np.repeat(np.arange(n_tasks), 2)
+    cost[task_of[:, None] == task_of[None, :]] = np.inf
+    order = order_variants(task_of, np.arange(2 * n_tasks) ^ 1, cost, np.zeros(len(pts)), np.zeros(len(pts)))
+    assert sorted(task_of[order].tolist()) == list(range(n_tasks))
+    assert tour_cost(order, cost, np.zeros(len(pts)), np.zeros(len(pts))) == 1300.0
+
+
+def test_the_heuristic_ordering_ends_when_transits_flown_backwards_cost_more():
+    # a transit and its mirror (both tasks flown the other way) may differ by a loop of a Dubins turn (2πR); the
+    # 2-opt moves, which count only the transits at the ends of the stretch they reverse, must not undo each other
+    # for ever (these costs made them do so)
+    rng = np.random.default_rng(72)
+    n_tasks = 14
+    pts = np.repeat(rng.uniform(0, 300, size=(n_tasks, 2)), 2, axis=0)
+    cost = np.linalg.norm(pts[:, None] - pts[None], axis=2) + rng.choice([0.0, 37.7], size=(len(pts), len(pts)))
+    task_of = np.repeat(np.arange(n_tasks), 2)
+    cost[task_of[:, None] == task_of[None, :]] = np.inf
+    order = order_variants(task_of, np.arange(len(pts)) ^ 1, cost, np.zeros(len(pts)), np.zeros(len(pts)))
+    assert sorted(task_of[order].tolist()) == list(range(n_tasks))
+
+
+def test_the_order_counts_how_long_each_way_of_flying_a_cell_is():
+    # a cell flown one way is a straight 100 m line east; the other way (same ends and headings) it makes a 50 m
+    # dog-leg north and back, 100 m longer: with the transits alike either way, the straight one is flown
+    scene = Scene.build([[0, 0], [0, 400], [300, 400], [300, 0]], [], 6.0, 2.0, SWATH)
+    east = np.array([[0.0, 0.0], [100.0, 0.0]])
+    short = Run(east, (east,), 0.0, 0.0)
+    long_ = Run(np.array([[0.0, 0.0], [50.0, 0.0], [50.0, 50.0], [50.0, 0.0], [100.0, 0.0]]), (east,), 0.0, 0.0)
+    other = Run(np.array([[200.0, 0.0], [300.0, 0.0]]), (np.array([[200.0, 0.0], [300.0, 0.0]]),), 0.0, 0.0)
+    runs = order_tasks(scene, [[long_, long_.reversed(), short, short.reversed()], [other, other.reversed()]])
+    assert sum(run.length for run in runs) == 200.0
+
+
 def test_a_start_point_shut_in_by_a_zone_still_gets_the_whole_survey():
     rect = [[0, 0], [0, 400], [300, 400], [300, 0]]
     hole = [[100, 150], [100, 250], [200, 250], [200, 150]]
@@ -147,3 +189,10 @@ def test_the_outermost_lines_stand_in_by_the_swath_overlap_and_save_a_line():
     assert len(plan.lines) == 6
     assert coverage_fraction(plan, rect, [], SWATH) >= 0.999
     assert len(meander(rect, spacing=SPACING, heading=90.0, swath=SPACING).lines) == 7    # no overlap, no saving
+
+
+def test_tiny_areas_order_more_drafts_in_full():
+    def square(side):
+        return Scene.build([[0, 0], [0, side], [side, side], [side, 0]], [], 6.0, 2.0, SWATH)
+
+    assert [_full_plans(square(side)) for side in (300.0, 600.0, 1000.0)] == [6, 4, 2]   # 0.09, 0.36, 1 km²
