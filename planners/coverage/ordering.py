@@ -18,7 +18,7 @@ Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 EXACT_MAX = 13
 EXACT_WORK = 4e6          # at most about this many transit sums in the exact search (subsets × variants² / 2)
-STARTS = 10               # beyond the exact search, how many of the shortest greedy tours are refined too
+STARTS = 3                # beyond the exact search, how many of the shortest greedy tours are refined too
 TWO_OPT_MOVES = 4         # 2-opt moves at most, per task
 
 
