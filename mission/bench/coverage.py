@@ -8,6 +8,10 @@ multibeam and 20 % overlap (line spacing 42–61 m) and a 6 m turning radius. Bo
 clearance and contour-pass tolerance, so they are compared at the same coverage. Goals: ≥ 99.5 % of the free
 area covered in every case; our path never longer than the baseline's; ≥ 10 % shorter on average where no-go
 zones split the lines; planning ≤ 1 s for areas up to 5 km².
+
+Planning times are the planners' CPU seconds (`time.process_time`; both are single-threaded): other jobs on a shared
+machine slow the wall clock, not these (the VO benchmark times its odometers the same way). The wall seconds are
+reported beside them.
 """
 
 from __future__ import annotations
@@ -15,7 +19,8 @@ from __future__ import annotations
 import math
 import statistics
 import time
-from typing import Any
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 import numpy as np
 import shapely
@@ -112,17 +117,24 @@ def _zones_split_lines(case: dict[str, Any], heading_deg: float, spacing: float)
     return bool(with_zones[0] > without[0])
 
 
+T = TypeVar("T")
+
+
+def _timed(plan: Callable[[], T]) -> tuple[T, float, float]:
+    """`plan()`, its CPU seconds and its wall seconds."""
+    c0, t0 = time.process_time(), time.perf_counter()
+    out = plan()
+    return out, time.process_time() - c0, time.perf_counter() - t0
+
+
 def run_case(case: dict[str, Any]) -> dict[str, Any]:
     from planners.coverage import baseline_boustrophedon, coverage_fraction, meander
 
     kw = {"swath": case["swath"]}
-    t0 = time.perf_counter()
-    ours = meander(case["area"], case["zones"], spacing=case["spacing"], turn_radius=TURN_RADIUS, **kw)
-    t_ours = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    base = baseline_boustrophedon(case["area"], case["zones"], case["spacing"], TURN_RADIUS, **kw)
-    t_base = time.perf_counter() - t0
-    t0 = time.perf_counter()
+    ours, t_ours, w_ours = _timed(lambda: meander(case["area"], case["zones"], spacing=case["spacing"],
+                                                  turn_radius=TURN_RADIUS, **kw))
+    base, t_base, w_base = _timed(lambda: baseline_boustrophedon(case["area"], case["zones"], case["spacing"],
+                                                                 TURN_RADIUS, **kw))
     bare = baseline_boustrophedon(case["area"], case["zones"], case["spacing"], TURN_RADIUS, fill_tolerance=1.0,
                                   **kw)
     return {
@@ -136,12 +148,12 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
                  "lines": len(ours.lines), "turns": ours.turns, "length_m": round(ours.length_m, 1),
                  "coverage_percent": round(100 * coverage_fraction(ours, case["area"], case["zones"],
                                                                    case["swath"]), 3),
-                 "time_s": round(t_ours, 3)},
+                 "time_s": round(t_ours, 3), "wall_s": round(w_ours, 3)},
         "baseline": {"heading_deg": round(base.heading_deg, 1), "lines": len(base.lines), "turns": base.turns,
                      "length_m": round(base.length_m, 1),
                      "coverage_percent": round(100 * coverage_fraction(base, case["area"], case["zones"],
                                                                        case["swath"]), 3),
-                     "time_s": round(t_base, 3)},
+                     "time_s": round(t_base, 3), "wall_s": round(w_base, 3)},
         "baseline_without_contour_passes": {
             "length_m": round(bare.length_m, 1),
             "coverage_percent": round(100 * coverage_fraction(bare, case["area"], case["zones"], case["swath"]), 3)},
@@ -174,7 +186,7 @@ def run(quick: bool) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:
             "mean_shortening_percent": {
                 "all": round(statistics.fmean(r["shortening_percent"] for r in rows), 2),
                 "where_zones_split_lines": round(shortening, 2)},
-            "planning_time_s": {"ours_max": slowest,
+            "planning_cpu_s": {"ours_max": slowest,
                                 "ours_median": statistics.median(r["ours"]["time_s"] for r in rows),
                                 "baseline_median": statistics.median(r["baseline"]["time_s"] for r in rows)},
         },
@@ -183,6 +195,6 @@ def run(quick: bool) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:
         "min_coverage_percent": check(coverage, ">= 99.5"),
         "max_length_ratio_vs_baseline": check(ratio, "<= 1.0"),
         "mean_shortening_percent_where_zones_split_lines": check(round(shortening, 2), ">= 10"),
-        "max_planning_time_s_up_to_5km2": check(slowest, "<= 1.0"),
+        "max_planning_cpu_s_up_to_5km2": check(slowest, "<= 1.0"),
     }
     return results, checks

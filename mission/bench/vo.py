@@ -45,6 +45,7 @@ from mission.bench import REPO, check
 
 KITTI = REPO.parent / "shared" / "data" / "kitti06_0-50"
 EFFECTIVE_STEPS = (2, 4, 8, 16)
+PHASES = 4          # robustness: the odometers also started 1 … PHASES - 1 frames late (not with --quick)
 
 
 def _errors(gt: np.ndarray, est: np.ndarray) -> dict[str, Any]:
@@ -67,7 +68,7 @@ def _relative(poses: np.ndarray) -> np.ndarray:
 def _lockstep(frames: Iterable[Any], specs: dict[str, tuple[str, dict[str, Any]]],
               views: dict[str, Callable[[int, Any], Any]] | None = None) -> dict[str, Any]:
     """Feed every frame once to one odometer per spec (through the spec's `views` entry, when it has one: what that
-    odometer sees of frame i); poses of all frames, CPU seconds and stats per spec."""
+    odometer sees of frame i, None for nothing); poses of all frames, CPU seconds and stats per spec."""
     from perception_plugins.vo import Odometer, settings_for
     from perception_plugins.vo.se3 import fill_poses
 
@@ -79,6 +80,8 @@ def _lockstep(frames: Iterable[Any], specs: dict[str, tuple[str, dict[str, Any]]
         count = i + 1
         for name, od in odometers.items():
             seen = views[name](i, frame) if views and name in views else frame
+            if seen is None:
+                continue
             t0 = time.process_time()
             for e in od.push(i, seen):
                 known[name][e.index] = e.T_origin_cam
@@ -236,10 +239,39 @@ class _Blackout:
         return StereoImages(frame.time, grey, grey.copy(), frame.K, frame.baseline)
 
 
+class _From:
+    """A view of a sequence from frame `first` on (nothing before it), through `inner` when given: an odometer
+    started later processes other frames of the same run."""
+
+    def __init__(self, first: int, inner: Callable[[int, Any], Any] | None = None) -> None:
+        self.first, self.inner = first, inner
+
+    def __call__(self, i: int, frame: Any) -> Any:
+        if i < self.first:
+            return None
+        return frame if self.inner is None else self.inner(i, frame)
+
+
+def _after_blackout(gt: np.ndarray, P: np.ndarray, after: slice) -> dict[str, float]:
+    """Over frames `after` (the rest of the run after the black-out): the error of the distance travelled, and the
+    relative pose's translation error per metre travelled and the attitude error it ends with (the odometer's own
+    drift after recovering, which the summed distance cannot show)."""
+    from perception_plugins.vo.se3 import invert, to_rotvec
+
+    steps_gt = np.linalg.norm(np.diff(gt[after, :3, 3], axis=0), axis=1).sum()
+    steps_est = np.linalg.norm(np.diff(P[after, :3, 3], axis=0), axis=1).sum()
+    T_gt, T_est = invert(gt[after.start]) @ gt[-1], invert(P[after.start]) @ P[-1]
+    return {"after_blackout_speed_error_percent": round(
+                100 * float(abs(steps_est - steps_gt) / max(steps_gt, 1e-9)), 2),
+            "after_blackout_drift_percent": round(
+                100 * float(np.linalg.norm(T_gt[:3, 3] - T_est[:3, 3]) / max(steps_gt, 1e-9)), 2),
+            "after_blackout_attitude_error_deg": round(
+                float(np.degrees(np.linalg.norm(to_rotvec(T_gt[:3, :3].T @ T_est[:3, :3])))), 2)}
+
+
 def _robustness(quick: bool) -> dict[str, Any]:
     from mission.sim.camera import Degradations
     from mission.sim.stereo_sequence import SequenceRenderer, seabed_world, survey_trajectory
-    from perception_plugins.vo.se3 import invert, to_rotvec
 
     duration, fps = (3.2 if quick else 40.0), 25.0
     degradations = Degradations(noise_sigma=3.0, blur_sigma_px=1.2, falloff_range_m=5.0, turbidity_per_m=0.12)
@@ -248,42 +280,52 @@ def _robustness(quick: bool) -> dict[str, Any]:
     start, length = len(seq) // 2, int((0.4 if quick else 0.6) * fps)
     checked: dict[str, tuple[str, dict[str, Any]]] = {
         "klt": ("klt", {"step": 2}), "network": ("network", {"step": 2}), "adaptive": ("adaptive", {"fps": fps})}
+    blackout = _Blackout(start, length)
     specs = {**checked,
              # without the low-pass (`OdometerSettings.prefilter_px`): reported, not checked
              "klt_without_prefilter": ("klt", {"step": 2, "prefilter_px": None}),
-             "adaptive_without_prefilter": ("adaptive", {"fps": fps, "prefilter_px": None}),
-             # the same odometers on the same frames without the black-out: what recovering means here
-             **{f"{name}_without_blackout": spec for name, spec in checked.items()}}
-    blackout = _Blackout(start, length)
-    runs = _lockstep(seq, specs, views={name: blackout for name in specs if not name.endswith("_without_blackout")})
+             "adaptive_without_prefilter": ("adaptive", {"fps": fps, "prefilter_px": None})}
+    views: dict[str, Callable[[int, Any], Any]] = {name: blackout for name in specs}
+    # the same odometers on the same frames without the black-out (what recovering means here), and both started
+    # 1, 2 … frames later: which frames a method happens to process moves its drift in the dark last third by
+    # several points (the adaptive method's by -3 to +3), so the black-out's effect is averaged over the phases
+    phases = 1 if quick else PHASES
+    for name, spec in checked.items():
+        for k in range(phases):
+            late = f"_from_{k}" if k else ""
+            specs[f"{name}{late}_without_blackout"] = spec
+            views[f"{name}{late}_without_blackout"] = _From(k)
+            if k:
+                specs[f"{name}{late}"] = spec
+                views[f"{name}{late}"] = _From(k, blackout)
+    runs = _lockstep(seq, specs, views=views)
     seq.close()
     gt = _relative(seq.poses)
-    table = _summarise(runs, gt, len(seq))
     after = slice(start + length + 4, len(seq))
-    for name, r in runs.items():
-        P = r["poses"]
-        steps_gt = np.linalg.norm(np.diff(gt[after, :3, 3], axis=0), axis=1)
-        steps_est = np.linalg.norm(np.diff(P[after, :3, 3], axis=0), axis=1)
-        table[name]["loss_rate"] = round(r["losses"] / max(r["positions"], 1), 4)
-        table[name]["after_blackout_speed_error_percent"] = round(
-            100 * float(abs(steps_est.sum() - steps_gt.sum()) / max(steps_gt.sum(), 1e-9)), 2)
-        table[name]["finite"] = bool(np.all(np.isfinite(P)))
-        # the relative pose over the rest of the run: its translation error per metre travelled, and the attitude
-        # error it ends with (the odometer's own drift after recovering, which the summed distance cannot show)
-        T_gt, T_est = invert(gt[after.start]) @ gt[-1], invert(P[after.start]) @ P[-1]
-        table[name]["after_blackout_drift_percent"] = round(
-            100 * float(np.linalg.norm(T_gt[:3, 3] - T_est[:3, 3]) / max(steps_gt.sum(), 1e-9)), 2)
-        table[name]["after_blackout_attitude_error_deg"] = round(
-            float(np.degrees(np.linalg.norm(to_rotvec(T_gt[:3, :3].T @ T_est[:3, :3])))), 2)
-    recovery = {name: {key: round(table[name][key] - table[f"{name}_without_blackout"][key], 2)
-                       for key in ("after_blackout_speed_error_percent", "after_blackout_drift_percent",
-                                   "after_blackout_attitude_error_deg")}
-                for name in checked}
+    table = _summarise({name: r for name, r in runs.items() if "_from_" not in name}, gt, len(seq))
+    for name in table:
+        P = runs[name]["poses"]
+        table[name].update(loss_rate=round(runs[name]["losses"] / max(runs[name]["positions"], 1), 4),
+                           finite=bool(np.all(np.isfinite(P))), **_after_blackout(gt, P, after))
+    keys = ("after_blackout_speed_error_percent", "after_blackout_drift_percent", "after_blackout_attitude_error_deg")
+    per_phase: dict[str, dict[str, list[float]]] = {}
+    for name in checked:
+        rows = []
+        for k in range(phases):
+            late = f"_from_{k}" if k else ""
+            with_, without = (_after_blackout(gt, runs[f"{name}{late}{tail}"]["poses"], after)
+                              for tail in ("", "_without_blackout"))
+            rows.append({key: round(with_[key] - without[key], 2) for key in keys})
+        per_phase[name] = {key: [row[key] for row in rows] for key in keys}
+    recovery = {name: {key: round(float(np.mean(values)), 2) for key, values in rows.items()}
+                for name, rows in per_phase.items()}
     return {"conditions": {"degradations": {"noise_sigma": 3.0, "blur_sigma_px": 1.2, "falloff_range_m": 5.0,
                                             "turbidity_per_m": 0.12}, "texture": "mud, scale 2 (low texture)",
-                           "blackout_frames": [start, start + length], "frames": len(seq), "fps": fps},
+                           "blackout_frames": [start, start + length], "frames": len(seq), "fps": fps,
+                           "start_phases": phases},
             "methods": table,
-            "excess_after_blackout": recovery}
+            "excess_after_blackout": recovery,
+            "excess_after_blackout_per_phase": per_phase}
 
 
 def _plugin(quick: bool) -> dict[str, Any]:
@@ -368,9 +410,10 @@ def checks_of(results: dict[str, Any]) -> dict[str, dict[str, Any]]:
     rob = {k: m for k, m in results["robustness"]["methods"].items() if k in ("klt", "network", "adaptive")}
     checks["robust_loss_rate_klt"] = check(rob["klt"]["loss_rate"], "<= 0.2")
     # Recovery: after the black-out every method tracks as it does over the same frames without the black-out (the
-    # drift per metre and the attitude error over the rest of the run within 2 points and 2°). The dark last third
-    # (6 m altitude, 5 m lamp range, turbid: the texture is under the noise at fine scales) makes every method drift
-    # with or without it; that absolute drift is reported in the methods' table, not checked.
+    # drift per metre and the attitude error over the rest of the run within 2 points and 2°, on average over the
+    # start phases: which frames a method processes moves that drift by a few points either way). The dark last
+    # third (6 m altitude, 5 m lamp range, turbid: the texture is under the noise at fine scales) makes every method
+    # drift with or without it; that absolute drift is reported in the methods' table, not checked.
     excess = results["robustness"]["excess_after_blackout"]
     finite = all(m["finite"] for m in rob.values())
     checks["robust_excess_drift_points_after_blackout"] = check(
@@ -438,10 +481,13 @@ def run(quick: bool) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:
         "classic's error is the texture's aliasing, and the classic-vs-KLT comparison turns on it.",
         "Recovery is judged against the same odometers on the same frames without the black-out "
         "(excess_after_blackout): the dark last third (6 m altitude, 5 m lamp range, turbid; at fine scales the "
-        "texture is under the noise) makes every method drift about 22 % of the distance and 25 deg of attitude "
+        "texture is under the noise) makes every method drift about 20 % of the distance and 20-25 deg of attitude "
         "with or without it, which the former absolute check (distance after the black-out within 10 %) conflated "
-        "with recovering. KLT and the network recover to within 0.3 points and 1.1 deg; the adaptive method, which "
-        "steps over the black-out without a loss, ends 2.6 points and 4.1 deg worse than its twin (check missed).",
+        "with recovering. Which frames a method processes moves that drift by a few points: started 0-5 frames "
+        "late, the adaptive method drifts 18.4-21.3 % without the black-out and 18.2-23.8 % with it (excess per "
+        "phase +2.6, -3.1, 0.0, +0.1, -1.8, +0.1 points). A single phase cannot tell the black-out from that, so "
+        "the excess is the mean over PHASES start phases (each with its own twin); the first phase alone is the "
+        "comparison session 6 checked (adaptive: 2.6 points, 4.1 deg, missed).",
         "Table 1's pass is centred on the world: from the origin the 240 s pass ran off the +-150 m seabed in its "
         "last 8 s (the views went black).",
     ]

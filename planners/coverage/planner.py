@@ -124,7 +124,7 @@ def meander(
         base_sweep = sweeps.get(h)
         base_runs = single_direction_runs(scene, base_sweep, fill_tolerance, s_xy)
         heads = np.array([h])
-    base = assemble(scene, base_runs, base_sweep.heading_deg, base_sweep.spacing, 1, "single-direction")
+    base = _Cap(scene, base_sweep, base_runs)
     # every direction planned up to its tasks; the most promising trimmed and ordered in full, with lines up to the
     # zones and (the best) in the headland layout too
     # our lines: the outermost ones may stand in from the edge by what the swath's overlap covers
@@ -171,7 +171,30 @@ def meander(
         if rows is not None:
             plan = _shortest(scene, [(estimated_length(scene, rows), base_sweep, rows, 1, "single-direction-cut",
                                       True)], base, allowed)
-    return base if plan is None else plan
+    return base.plan if plan is None else plan
+
+
+class _Cap:
+    """The single-direction plan that ours may not be longer than, built only when a comparison needs its length:
+    its runs plus straight hops between them are a lower bound (a transit is no shorter than the straight line),
+    and most of our plans are shorter than that."""
+
+    def __init__(self, scene: Scene, sweep: Sweep, runs: list[Run]):
+        self.scene, self.sweep, self.runs = scene, sweep, runs
+        hops = sum(float(np.linalg.norm(b.path[0] - a.path[-1])) for a, b in zip(runs[:-1], runs[1:], strict=True))
+        self.lower = (sum(r.length for r in runs) + hops) * (1.0 - 1e-9)
+        self._plan: CoveragePlan | None = None
+
+    @property
+    def plan(self) -> CoveragePlan:
+        if self._plan is None:
+            self._plan = assemble(self.scene, self.runs, self.sweep.heading_deg, self.sweep.spacing, 1,
+                                  "single-direction")
+        return self._plan
+
+    def below(self, length: float, factor: float = 1.0, slack: float = 0.0) -> bool:
+        """Whether `length` ≤ `factor` times the plan's length plus `slack`."""
+        return length <= factor * self.lower + slack or length <= factor * self.plan.length_m + slack
 
 
 def _passing(scene: Scene, spacing: float, inset: float) -> Passing | None:
@@ -254,7 +277,7 @@ def _scale(scene: Scene) -> int:
     return 2 if scene.area.area <= SMALL_AREA else 1
 
 
-def _shortest(scene: Scene, options: list[Option], base: CoveragePlan,
+def _shortest(scene: Scene, options: list[Option], base: _Cap,
               allowed: Callable[[], float]) -> CoveragePlan | None:
     """The shortest option flown in full that is no longer than `base` (and, where it is to be checked, leaves at
     most `allowed()` m² of the free area uncovered). Estimates only screen the options: every one within 2 % of
@@ -262,11 +285,11 @@ def _shortest(scene: Scene, options: list[Option], base: CoveragePlan,
     their estimates either way."""
     best: CoveragePlan | None = None
     for estimate, sweep, runs, n_cells, method, check in sorted(options, key=lambda o: o[0]):
-        if estimate > base.length_m * 1.02 or (best is not None and estimate >= best.length_m):
+        if not base.below(estimate, 1.02) or (best is not None and estimate >= best.length_m):
             continue
         if check and uncovered_area(scene, runs) > allowed():
             continue
         plan = assemble(scene, runs, sweep.heading_deg, sweep.spacing, n_cells, method)
-        if plan.length_m <= base.length_m + 1e-6 and (best is None or plan.length_m < best.length_m):
+        if base.below(plan.length_m, slack=1e-6) and (best is None or plan.length_m < best.length_m):
             best = plan
     return best

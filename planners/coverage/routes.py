@@ -41,7 +41,10 @@ class Router:
         self.blocking = blocking
         self.empty = bool(blocking.is_empty)
         self._seen: dict[bytes, Array] = {}
-        shapely.prepare(blocking)
+        # the zones one by one behind a tree of their extents: most segments pass far from all of them
+        self._parts = shapely.get_parts(blocking)
+        shapely.prepare(self._parts)
+        self._tree = shapely.STRtree(self._parts)
         self.nodes = _ring_vertices(obstacles) if not self.empty else np.zeros((0, 2))
         n = len(self.nodes)
         dist = np.full((n, n), np.inf)
@@ -72,7 +75,10 @@ class Router:
         if self.empty or len(pa) == 0:
             return np.ones(len(pa), dtype=bool)
         segs = shapely.linestrings(np.stack([pa, pb], axis=1))
-        return ~np.asarray(shapely.intersects(segs, self.blocking), dtype=bool)
+        seg, part = self._tree.query(segs)                 # extents that overlap
+        out = np.ones(len(segs), dtype=bool)
+        out[seg[shapely.intersects(self._parts[part], segs[seg])]] = False
+        return out
 
     def _reach(self, pts: Array) -> Array:
         """Straight distance from each point to each graph node it sees (inf where hidden); remembered per point,

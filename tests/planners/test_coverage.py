@@ -134,3 +134,18 @@ def test_bad_polygons_and_spacings_are_refused():
         meander(RECT, spacing=0.0)
     with pytest.raises(ValueError, match="cover the whole"):
         meander(RECT, [[[-10, -10], [-10, 410], [310, 410], [310, -10]]], spacing=SPACING)
+
+
+def test_transit_segments_are_clear_exactly_where_they_miss_every_zone():
+    from planners.coverage.routes import Router
+
+    zones = shapely.union_all([shapely.box(0, 0, 10, 10), shapely.box(30, 0, 40, 10),
+                               Polygon([(15, 20), (25, 20), (20, 30)])])
+    rng = np.random.default_rng(3)
+    a, b = rng.uniform(-10, 50, (400, 2)), rng.uniform(-10, 50, (400, 2))
+    router = Router(zones, zones)
+    truth = ~shapely.intersects(shapely.linestrings(np.stack([a, b], axis=1)), zones)
+    assert 50 < truth.sum() < 350                          # both kinds occur
+    assert np.array_equal(router.clear(a, b), truth)
+    assert router.clear([-5.0, 15.0], [45.0, 15.0]).tolist() == [True]        # between the squares and the triangle
+    assert router.clear([-5.0, 5.0], [45.0, 5.0]).tolist() == [False]         # through both squares
