@@ -187,8 +187,8 @@ def run(quick: bool) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:
                 "all": round(statistics.fmean(r["shortening_percent"] for r in rows), 2),
                 "where_zones_split_lines": round(shortening, 2)},
             "planning_cpu_s": {"ours_max": slowest,
-                                "ours_median": statistics.median(r["ours"]["time_s"] for r in rows),
-                                "baseline_median": statistics.median(r["baseline"]["time_s"] for r in rows)},
+                               "ours_median": statistics.median(r["ours"]["time_s"] for r in rows),
+                               "baseline_median": statistics.median(r["baseline"]["time_s"] for r in rows)},
         },
     }
     checks = {
