@@ -122,15 +122,16 @@ def contour_runs(scene: Scene, residual: BaseGeometry, spacing: float, tolerance
                 continue
             arcs.append(arc)
             covers.append(shapely.buffer(shapely.linestrings(arc), scene.swath / 2.0, cap_style="flat"))
-    # greedy set cover, lazily: a pass's gain only shrinks as others are chosen
-    gains = [residual.intersection(c).area for c in covers]
+    # greedy set cover, lazily: a pass's gain only shrinks as others are chosen. What is left uncovered is kept
+    # as the residual's parts, each behind the extent it started with: a pass meets only the parts near it
+    left = _Parts(residual)
+    gains = [left.area_in(c) for c in covers]
     heap = [(-g, k) for k, g in enumerate(gains) if g > 0.0]
     heapq.heapify(heap)
     runs = []
-    left = residual
     while heap and left.area > budget:
         _, k = heapq.heappop(heap)
-        gain = left.intersection(covers[k]).area
+        gain = left.area_in(covers[k])
         if heap and gain < -heap[0][0] - 1e-9:
             if gain > 0.0:
                 heapq.heappush(heap, (-gain, k))
@@ -138,5 +139,28 @@ def contour_runs(scene: Scene, residual: BaseGeometry, spacing: float, tolerance
         if gain <= 0.0:
             break
         runs.append(polyline_run(arcs[k]))
-        left = left.difference(covers[k])
+        left.remove(covers[k])
     return runs
+
+
+class _Parts:
+    """An area as its separate parts behind a tree of their first extents (parts only shrink), so that a pass's
+    overlap and what it leaves are found from the few parts near it."""
+
+    def __init__(self, geom: BaseGeometry):
+        self.parts = shapely.get_parts(geom)
+        self.tree = shapely.STRtree(self.parts)
+        self.areas = shapely.area(self.parts)
+        self.area = float(self.areas.sum())
+
+    def area_in(self, cover: BaseGeometry) -> float:
+        near = self.tree.query(cover)
+        return float(shapely.area(shapely.intersection(self.parts[near], cover)).sum()) if len(near) else 0.0
+
+    def remove(self, cover: BaseGeometry) -> None:
+        near = self.tree.query(cover)
+        if len(near):
+            self.parts[near] = shapely.difference(self.parts[near], cover)
+            new = shapely.area(self.parts[near])
+            self.area -= float(self.areas[near].sum() - new.sum())
+            self.areas[near] = new

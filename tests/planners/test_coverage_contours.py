@@ -170,3 +170,19 @@ def test_contour_passes_bridge_short_gaps_unless_asked_not_to():
     assert sum(run.length for run in apart) < bridged[0].length - 10.0
     for runs in (bridged, apart):
         assert residual.difference(swept([seg for run in runs for seg in run.lines], SWATH)).area < 1e-6
+
+
+def test_the_area_left_to_contour_passes_shrinks_exactly_as_a_whole_polygon_would():
+    from planners.coverage.contours import _Parts
+
+    rng = np.random.default_rng(3)
+    blobs = [shapely.Point(x, y).buffer(r) for x, y, r in zip(rng.uniform(0, 500, 30), rng.uniform(0, 500, 30),
+                                                             rng.uniform(5, 40, 30), strict=True)]
+    whole = shapely.union_all(blobs)
+    left = _Parts(whole)
+    for x, y in rng.uniform(0, 500, (12, 2)):
+        cover = LineString([(x, y), (x + 120.0, y + 40.0)]).buffer(30.0, cap_style="flat")
+        assert left.area_in(cover) == pytest.approx(whole.intersection(cover).area, rel=1e-9, abs=1e-6)
+        left.remove(cover)
+        whole = whole.difference(cover)
+        assert left.area == pytest.approx(whole.area, rel=1e-9)
