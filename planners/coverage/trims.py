@@ -90,11 +90,15 @@ def trim_to_neighbours(sweep: Sweep, need: BaseGeometry, swath: float, sliver: f
     by_row: dict[int, list[int]] = {}
     for k, q in enumerate(p):
         by_row.setdefault(q.row, []).append(k)
+    # the middle of each band first: where its part of `need` already reaches both ends of the line, the strips
+    # along the band's edges cannot change the line's extent
+    middle = np.array([(q.u0, mid[k] - half + reach, q.u1, mid[k] + half - reach) for k, q in enumerate(p)])
+    lo, hi = _extents(middle, np.arange(len(p)), len(p), need, sweep.heading_deg, sliver * s**2)
     boxes: list[tuple[float, float, float, float]] = []
     owner: list[int] = []
     for k, q in enumerate(p):
-        boxes.append((q.u0, mid[k] - half + reach, q.u1, mid[k] + half - reach))       # the middle of the band
-        owner.append(k)
+        if lo[k] <= q.u0 and hi[k] >= q.u1:
+            continue
         for side in (1, -1):                                # the strips along the band's upper and lower edges
             if side > 0:
                 lo_v, hi_v = mid[k] + half - reach, mid[k] + half + float(above[k])
@@ -114,23 +118,32 @@ def trim_to_neighbours(sweep: Sweep, need: BaseGeometry, swath: float, sliver: f
             if at < q.u1:
                 boxes.append((at, lo_v, q.u1, hi_v))
                 owner.append(k)
-    box = np.array(boxes)
-    corners = np.stack([box[:, [0, 1]], box[:, [2, 1]], box[:, [2, 3]], box[:, [0, 3]]], axis=1)
-    shapely.prepare(need)
-    parts = shapely.intersection(shapely.polygons(from_sweep(corners, sweep.heading_deg)), need)
-    min_area = sliver * s**2
-    coords: dict[int, list[Array]] = {}
-    for k, geom in zip(owner, parts, strict=True):
-        for g in shapely.get_parts(geom):
-            if g.area > min_area:
-                coords.setdefault(k, []).append(shapely.get_coordinates(g))
+    if boxes:
+        s_lo, s_hi = _extents(np.array(boxes), np.array(owner), len(p), need, sweep.heading_deg, sliver * s**2)
+        lo, hi = np.minimum(lo, s_lo), np.maximum(hi, s_hi)
     extent: dict[int, tuple[float, float]] = {}
-    for k, found in coords.items():
-        u = to_sweep(np.concatenate(found), sweep.heading_deg)[:, 0]
-        lo, hi = max(p[k].u0, float(u.min())), min(p[k].u1, float(u.max()))
-        if hi > lo:
-            extent[k] = (lo, hi)
+    for k, q in enumerate(p):
+        a, b = max(q.u0, float(lo[k])), min(q.u1, float(hi[k]))
+        if b > a:
+            extent[k] = (a, b)
     return _with_extents(sweep, extent)
+
+
+def _extents(boxes: Array, owner: NDArray[np.int64], count: int, need: BaseGeometry, heading_deg: float,
+             min_area: float) -> tuple[Array, Array]:
+    """Per owner (of `count`), the least and greatest u of the parts larger than `min_area` of `need` (x, y)
+    within its (u0, v0, u1, v1) sweep-frame `boxes` (inf, −inf where there are none)."""
+    corners = np.stack([boxes[:, [0, 1]], boxes[:, [2, 1]], boxes[:, [2, 3]], boxes[:, [0, 3]]], axis=1)
+    shapely.prepare(need)
+    parts, index = shapely.get_parts(shapely.intersection(shapely.polygons(from_sweep(corners, heading_deg)), need),
+                                     return_index=True)
+    big = shapely.area(parts) > min_area
+    coords, which = shapely.get_coordinates(parts[big], return_index=True)
+    u = to_sweep(coords, heading_deg)[:, 0]
+    lo, hi = np.full(count, np.inf), np.full(count, -np.inf)
+    np.minimum.at(lo, owner[index[big][which]], u)
+    np.maximum.at(hi, owner[index[big][which]], u)
+    return lo, hi
 
 
 def _below(sweep: Sweep) -> Array:
