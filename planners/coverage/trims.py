@@ -42,25 +42,21 @@ def trim_to_need(sweep: Sweep, need: BaseGeometry, covered: BaseGeometry | None 
     u1 = np.array([q.u1 for q in p])
     v = sweep.rows[[q.row for q in p]]                  # the bands' middles (a line may be shifted off it)
     v_lo, v_hi = v - half - _below(sweep), v + half + _above(sweep)
-    corners = np.stack([np.stack([u0, v_lo], 1), np.stack([u1, v_lo], 1), np.stack([u1, v_hi], 1),
-                        np.stack([u0, v_hi], 1)], axis=1)                           # (P, 4, 2) in the sweep frame
-    bands = shapely.polygons(from_sweep(corners, sweep.heading_deg))
-    todo = np.arange(len(p)) if covered is None else np.flatnonzero(shapely.intersects(bands, covered))
-    shapely.prepare(need)
-    parts = shapely.intersection(bands[todo], need)
-    min_area = sliver * sweep.spacing**2
+    boxes = np.stack([u0, v_lo, u1, v_hi], axis=1)                                 # (P, 4) in the sweep frame
+    if covered is None:
+        todo = np.arange(len(p))
+    else:
+        corners = np.stack([boxes[:, [0, 1]], boxes[:, [2, 1]], boxes[:, [2, 3]], boxes[:, [0, 3]]], axis=1)
+        todo = np.flatnonzero(shapely.intersects(shapely.polygons(from_sweep(corners, sweep.heading_deg)), covered))
+    lo, hi = _extents(boxes[todo], np.arange(len(todo)), len(todo), need, sweep.heading_deg,
+                      sliver * sweep.spacing**2)
     extent = {k: (q.u0, q.u1) for k, q in enumerate(p)}
-    for k, geom in zip(todo, parts, strict=True):
-        big = [g for g in shapely.get_parts(geom) if g.area > min_area]
-        if not big:
-            del extent[int(k)]
-            continue
-        u = to_sweep(np.concatenate([shapely.get_coordinates(g) for g in big]), sweep.heading_deg)[:, 0]
-        lo, hi = max(p[k].u0, float(u.min())), min(p[k].u1, float(u.max()))
-        if hi > lo:
-            extent[int(k)] = (lo, hi)
+    for i, k in enumerate(todo.tolist()):
+        a, b = max(p[k].u0, float(lo[i])), min(p[k].u1, float(hi[i]))
+        if b > a:
+            extent[k] = (a, b)
         else:
-            del extent[int(k)]
+            del extent[k]
     return _with_extents(sweep, extent)
 
 
