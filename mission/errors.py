@@ -45,3 +45,12 @@ class PluginError(AuvError):
 
 class RunFolderError(AuvError):
     """A run folder is missing files or holds files of the wrong shape."""
+
+
+class VehicleError(AuvError):
+    """A vehicle adapter cannot be found, reached, or commanded (unknown URI scheme, no heartbeat, refused
+    arming or mode change)."""
+
+
+class LinkLostError(VehicleError):
+    """The link to a real vehicle was silent for longer than `safety.link_timeout`."""

@@ -19,7 +19,7 @@ from mission.language.models import Mission, RouteElement, Transit
 from mission.plugin_host import PluginHost
 from mission.safety import SafetyMonitors, Violation
 from mission.strategy import inspection_run, order_objects
-from mission.vehicle import Command, NavState, Vehicle
+from mission.vehicle import Command, NavState, VehicleInterface
 
 MARGIN_S = 120.0  # extra time every default timeout allows
 
@@ -71,7 +71,7 @@ def default_timeout(element: RouteElement, nav: NavState, mission: Mission) -> f
 class Executive:
     """Runs a mission on a vehicle. `emit(event, time, **fields)` receives every event as it happens."""
 
-    def __init__(self, mission: Mission, vehicle: Vehicle, emit: Callable[..., None],
+    def __init__(self, mission: Mission, vehicle: VehicleInterface, emit: Callable[..., None],
                  agents: Mapping[str, Callable[[], Agent]] | None = None,
                  on_tick: Callable[[NavState], None] | None = None, plugins: PluginHost | None = None,
                  artifacts: Artifacts | None = None):

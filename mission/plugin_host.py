@@ -68,6 +68,13 @@ class PluginHost:
             return _failed(role, "over the time budget", elapsed_ms=1e3 * elapsed)
         return result
 
+    def submit(self, role: str, frame: StereoImages, request: Any, now: float) -> PluginCall:
+        """Hand a frame to a plug-in without waiting for it; `PluginCall.poll(now)` gives the result once it is
+        ready (tagged with `frame.time`: the agent uses it at that time, with the navigation estimate then).
+
+        A fault or an overrun gives the role's "no answer" result, as `process` does."""
+        return PluginCall(role, frame.time, self.process(role, frame, request, now), ready_at=now)
+
     def reset(self) -> None:
         for role, plugin in self.plugins.items():
             try:
@@ -81,6 +88,19 @@ class PluginHost:
                 plugin.close()
             except Exception as exc:
                 self.emit("plugin_fault", 0.0, plugin=self.names[role], role=role, error=repr(exc))
+
+
+class PluginCall:
+    """A plug-in call under way. `poll(now)` is None until the result is ready at the vehicle's time `now`."""
+
+    def __init__(self, role: str, frame_time: float, result: Any = None, ready_at: float = float("inf")):
+        self.role = role
+        self.frame_time = frame_time
+        self._result = result
+        self._ready_at = ready_at
+
+    def poll(self, now: float) -> Any | None:
+        return self._result if now >= self._ready_at else None
 
 
 def _failed(role: str, reason: str, **details: Any) -> ReferencingResult | OdometryResult:

@@ -1,7 +1,8 @@
 """What the executive and agents exchange with a vehicle: estimated state in, setpoints out.
 
-The simulator is one implementation of `Vehicle`; a real vehicle is an adapter behind the same five calls.
-Nothing here knows the truth.
+The simulator is one implementation of `VehicleInterface`; a real vehicle is an adapter behind the same six calls
+(adapters are entry points in the group `auv.vehicles`, picked by the scheme of a `--vehicle` URI). Nothing here
+knows the truth.
 """
 
 from __future__ import annotations
@@ -80,6 +81,7 @@ class Observation:
     sonar: tuple[SonarPing, ...] = ()
     stereo: tuple[StereoImages, ...] = ()
     scans: tuple[ScanFrame, ...] = ()
+    in_control: bool = True  # False while a pilot has taken the vehicle over: the executive pauses the mission
 
 
 @dataclass(frozen=True)
@@ -105,8 +107,9 @@ HOVER_SPEED = 0.3  # m/s: the fastest a station-keeping vehicle moves towards it
 HOVER_GAIN = 0.5  # (m/s) per metre of station error
 
 
-class Vehicle(Protocol):
-    """The executive's view of a vehicle (simulated or real)."""
+class VehicleInterface(Protocol):
+    """The executive's view of a vehicle (simulated or real). A real vehicle's adapter raises
+    `mission.errors.LinkLostError` from `observe` or `advance` when its link has been silent too long."""
 
     control_period: float
 
@@ -131,5 +134,6 @@ class Vehicle(Protocol):
         ...
 
     def advance(self) -> None:
-        """Let one control period pass (the simulator integrates it; a real vehicle waits)."""
+        """Let one control period pass (the simulator integrates it; a real vehicle waits for its own clock,
+        never longer than a few periods of wall time)."""
         ...

@@ -1,1 +1,1 @@
-"""The simulator: a kinematic vehicle with sensors in a seeded world, behind the `Vehicle` interface."""
+"""The simulator: a kinematic vehicle with sensors in a seeded world, behind the `VehicleInterface`."""

@@ -1,5 +1,5 @@
 """The simulated vehicle: true kinematics in a scene, sensors with their errors (DVL/INS, depth, USBL), the
-onboard navigation filter, energy use, and a log of truth against estimate. Behind the `Vehicle` interface the
+onboard navigation filter, energy use, and a log of truth against estimate. Behind the `VehicleInterface` the
 executive sees only the estimate.
 """
 
