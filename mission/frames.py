@@ -15,6 +15,8 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from mission.geometry import invert, transform_points
+
 Array = NDArray[np.float64]
 
 
@@ -39,19 +41,6 @@ def pose_matrix(
     return T
 
 
-def transform_points(T_a_b: Array, points_b: Array) -> Array:
-    """Map (N, 3) points from frame b to frame a."""
-    pts = np.asarray(points_b, dtype=float).reshape(-1, 3)
-    return pts @ T_a_b[:3, :3].T + T_a_b[:3, 3]
-
-
-def invert(T_a_b: Array) -> Array:
-    """T_b_a from T_a_b for a rigid transform."""
-    T = np.eye(4)
-    R = T_a_b[:3, :3]
-    T[:3, :3] = R.T
-    T[:3, 3] = -R.T @ T_a_b[:3, 3]
-    return T
 
 
 def heading_of(T_world_frame: Array) -> float:

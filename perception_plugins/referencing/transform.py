@@ -20,56 +20,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from mission.geometry import _as_points, rigid_transform, rotation_angle_deg
+from mission.geometry import transform_points as apply
+
 Array = NDArray[np.float64]
-
-
-def _as_points(points: Array, name: str) -> Array:
-    arr = np.asarray(points, dtype=float)
-    if arr.ndim != 2 or arr.shape[1] != 3:
-        raise ValueError(f"{name} must have shape (n, 3), got {arr.shape}")
-    return arr
-
-
-def rigid_transform(src: Array, dst: Array, weights: Array | None = None) -> Array:
-    """The 4×4 proper rigid transform T minimising Σ w‖dst − T·src‖² (rotation det = +1, no scale).
-
-    Needs at least three pairs; for collinear sets the rotation about their line is arbitrary but proper.
-    """
-    src, dst = _as_points(src, "src"), _as_points(dst, "dst")
-    if src.shape != dst.shape or len(src) < 3:
-        raise ValueError(f"src and dst must be matching (n >= 3, 3) arrays, got {src.shape} and {dst.shape}")
-    if weights is None:
-        mu_s, mu_d = src.mean(axis=0), dst.mean(axis=0)
-        cov = (dst - mu_d).T @ (src - mu_s)
-    else:
-        w = np.asarray(weights, dtype=float) / np.sum(weights)
-        mu_s, mu_d = w @ src, w @ dst
-        cov = (dst - mu_d).T @ ((src - mu_s) * w[:, None])
-    u, _, vt = np.linalg.svd(cov)
-    rot = u @ vt
-    if _det3(rot) < 0:                                  # flip the weakest axis rather than reflect
-        u[:, 2] = -u[:, 2]
-        rot = u @ vt
-    T = np.eye(4)
-    T[:3, :3] = rot
-    T[:3, 3] = mu_d - rot @ mu_s
-    return T
-
-
-def _det3(m: Array) -> float:
-    return float(m[0, 0] * (m[1, 1] * m[2, 2] - m[1, 2] * m[2, 1]) - m[0, 1] * (m[1, 0] * m[2, 2] - m[1, 2] * m[2, 0])
-                 + m[0, 2] * (m[1, 0] * m[2, 1] - m[1, 1] * m[2, 0]))
-
-
-def apply(T: Array, points: Array) -> Array:
-    """T·p for every row p of `points` (n, 3)."""
-    return np.asarray(points, dtype=float) @ T[:3, :3].T + T[:3, 3]
-
-
-def rotation_angle_deg(R: Array) -> float:
-    """The angle of a rotation matrix, in degrees (0…180)."""
-    c = (float(np.trace(R[:3, :3])) - 1.0) / 2.0
-    return math.degrees(math.acos(min(1.0, max(-1.0, c))))
 
 
 def is_degenerate(points: Array, min_spread: float) -> bool:
