@@ -15,8 +15,6 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from mission.geometry import invert, transform_points
-
 Array = NDArray[np.float64]
 
 

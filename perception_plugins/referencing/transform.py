@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from mission.geometry import _as_points, rigid_transform, rotation_angle_deg
+from mission.geometry import _as_points, rigid_transform
 from mission.geometry import transform_points as apply
 
 Array = NDArray[np.float64]
