@@ -131,6 +131,7 @@ class Safety(Strict):
     max_duration: Duration = 6 * 3600.0
     energy_reserve: Percent = 20.0
     on_violation: OnViolation = OnViolation()
+    link_timeout: Duration = 3.0  # onboard: no heartbeat from the vehicle for this long is a lost link
 
 
 class Pose(Strict):
