@@ -15,6 +15,9 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from mission.geometry import invert as invert
+from mission.geometry import transform_points as transform_points
+
 Array = NDArray[np.float64]
 
 

@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mission.geometry import _as_points, rigid_transform
+from mission.geometry import rotation_angle_deg as rotation_angle_deg
 from mission.geometry import transform_points as apply
 
 Array = NDArray[np.float64]
