@@ -11,7 +11,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from mission.agents import REGISTRY, Agent, AgentContext, Status
+from mission.agents import REGISTRY, Agent, AgentContext, AgentReport, Status
 from mission.agents.transit import TransitAgent
 from mission.artifacts import Artifacts
 from mission.knowledge import Knowledge
@@ -33,7 +33,7 @@ class ElementReport:
     end_time: float = math.nan
     reason: str = ""
     planned_path: list[tuple[float, float]] = field(default_factory=list)
-    details: dict[str, Any] = field(default_factory=dict)
+    details: AgentReport = field(default_factory=AgentReport)
 
     @property
     def duration_s(self) -> float:
@@ -164,7 +164,7 @@ class Executive:
         if self.plugins is not None:
             self.plugins.reset()
         rep.end_time = nav.time
-        rep.details = dict(agent.details)
+        rep.details = agent.details
         event = "element_finished" if rep.status == "succeeded" else "element_failed"
         self.emit(event, nav.time, element=element_id, kind=kind, status=rep.status, reason=rep.reason,
                   duration_s=rep.duration_s, north=nav.north, east=nav.east, depth=nav.depth)

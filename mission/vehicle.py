@@ -89,7 +89,8 @@ class Command:
     """Autopilot setpoints: heading (deg), speed through water (m/s), and depth or altitude (m) or neither.
 
     `station` (north, east in the estimated frame) asks a hover-capable vehicle to hold that point: the
-    autopilot then drives towards it at up to `HOVER_SPEED` whatever the heading, and `speed` is ignored."""
+    autopilot then drives towards it at up to `STATION_KEEPING_SPEED_M_S` whatever the heading, and `speed` is
+    ignored."""
 
     heading: float
     speed: float
@@ -103,7 +104,7 @@ class Command:
         return Command(heading=nav.heading, speed=0.0, depth=nav.depth)
 
 
-HOVER_SPEED = 0.3  # m/s: the fastest a station-keeping vehicle moves towards its station
+STATION_KEEPING_SPEED_M_S = 0.3  # m/s: the fastest a station-keeping vehicle moves towards its station
 HOVER_GAIN = 0.5  # (m/s) per metre of station error
 
 

@@ -1,4 +1,4 @@
-"""Tactical agents by route-element kind. Later issues register `explore` and `inspect` here."""
+"""Tactical agents by route-element kind, and the reports they hand to the metrics."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ from mission.agents.base import Agent, AgentContext, Status
 from mission.agents.explore import ExploreAgent
 from mission.agents.inspect import InspectAgent
 from mission.agents.reference import ReferenceAgent
+from mission.agents.report import AgentReport
 from mission.agents.survey import SurveyAgent
 from mission.agents.transit import TransitAgent
 
@@ -30,5 +31,5 @@ def create_agent(kind: str) -> Agent:
     return REGISTRY[kind]()
 
 
-__all__ = ["Agent", "AgentContext", "ExploreAgent", "InspectAgent", "REGISTRY", "ReferenceAgent",
+__all__ = ["Agent", "AgentContext", "AgentReport", "ExploreAgent", "InspectAgent", "REGISTRY", "ReferenceAgent",
            "Status", "SurveyAgent", "TransitAgent", "create_agent", "supported_kinds"]

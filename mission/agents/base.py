@@ -15,8 +15,9 @@ import abc
 import enum
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import ClassVar
 
+from mission.agents.report import AgentReport
 from mission.artifacts import Artifacts
 from mission.knowledge import Knowledge
 from mission.language.models import Mission, RouteElement
@@ -55,7 +56,7 @@ class Agent(abc.ABC):
         self.navigation: str = "usbl"  # "usbl" or "dead-reckoning": which aiding the agent asks for
         self.payload: frozenset[str] = frozenset()  # payload sensors the agent needs on now ("mbes", "stereo")
         self.frame_rate_hz: float | None = None  # stereo frames per second wanted (None: the camera's own rate)
-        self.details: dict[str, Any] = {}  # element results for metrics (agent-specific)
+        self.details: AgentReport = AgentReport()  # element results for metrics (a dataclass per agent kind)
 
     @abc.abstractmethod
     def start(self, context: AgentContext) -> None:

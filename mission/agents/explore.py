@@ -26,13 +26,14 @@ mission's `safe_distance` plus `NAV_MARGIN_M` for the navigation error between t
 
 from __future__ import annotations
 
+import enum
 import math
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from mission.agents.base import Agent, AgentContext, Status
+from mission.agents.explore_nbv import FixedMountNbv, TargetRun, mount_tilt_deg, object_region, scan_of
 from mission.agents.explore_region import (
     Target,
     exploration_box,
@@ -41,13 +42,14 @@ from mission.agents.explore_region import (
     survey_map_for,
     targets,
 )
+from mission.agents.report import ExploredObject, ExploreReport
 from mission.agents.station_path import StationPath
-from mission.frames import rotation_zyx, wrap_deg
+from mission.frames import wrap_deg
 from mission.language.models import Explore
 from mission.vehicle import Command, NavState, Observation, ScanFrame
-from planners.nbv import NbvPlanner, Scan, Scanner, View, Views, Weights, connect, segment_safe
+from planners.nbv import NbvPlanner, Scanner, View, Weights, connect, segment_safe
 from planners.nbv.candidates import is_safe_view
-from planners.nbv.grid import FREE, UNKNOWN, StateGrid
+from planners.nbv.grid import FREE, UNKNOWN
 
 RESOLUTION_M = 0.25
 PLANNING_RAYS = (24, 18)  # the planner's model of the frustum; the sensor itself has more rays
@@ -56,113 +58,27 @@ COVERAGE_TARGET = 0.97
 MAX_REJECTIONS = 10
 HEADING_TOLERANCE_DEG = 6.0
 CLIMB_RATE = 0.35  # m/s, a conservative figure for the time needed to climb away at the end
-APPROACH_HANDOVER_M = 2.0
 PRIOR_UNCERTAIN_M = 0.5  # the survey's soundings are 0.5 m cell means: the last 0.5 m above them stays unknown
 MIN_UNKNOWN = 4  # a view that would reveal fewer unknown voxels of the object's region is not worth the move
-FOCUS_MARGIN_M = 1.5  # the object's region: its footprint's circle and its height grown by this much
+APPROACH_HANDOVER_M = 2.0  # cruising ends, station keeping begins, this far from the point above the start view
 MIN_FRAME_MOVE_M = 0.4  # a frame is fused into the planner's map when the vehicle has moved or turned this much
-MIN_FRAME_TURN_DEG = 5.0  # cruising ends, station keeping begins, this far from the point above the start view
+MIN_FRAME_TURN_DEG = 5.0
 
 
-@dataclass
-class FixedMountNbv(NbvPlanner):
-    """`NbvPlanner` for a scanner fixed to the hull: every candidate has the mount's pitch (the vehicle can turn
-    to any heading but keeps its pitch).
+class Phase(enum.Enum):
+    """Where a next-best-view exploration is: the cruise and descent to the start view, the loop over views
+    (move → settle → propose), and the climb away at the end."""
 
-    With a `focus` (a boolean mask over the state grid: the object's region), the frontier and contour terms count
-    the object only: unknown voxels outside the focus (the seabed's shadows around it, which the survey left and
-    no view of the object needs) are free for visibility, and only contour voxels inside it count and anchor
-    candidates. Safety is unchanged: candidates and paths use the true states' safety grid, where unknown space
-    is an obstacle.
-    """
-
-    pitch_deg: float = -25.0
-    focus: np.ndarray | None = None
-
-    def utility_grid(self) -> tuple[StateGrid, np.ndarray]:
-        """The state grid the utility sees, and the contour ids that count."""
-        contour = self.derived.contour_ids()
-        if self.focus is None:
-            return self.grid, contour
-        states = self.grid.states.copy()
-        states[(states == UNKNOWN) & ~self.focus] = FREE
-        return StateGrid(states, self.grid.key_lo, self.grid.resolution), contour[self.focus.reshape(-1)[contour]]
-
-    def mounted(self, views: Views) -> Views:
-        return Views(views.positions, views.heading_deg, np.full(len(views), self.pitch_deg))
-
-
-def object_region(grid: StateGrid, target: Target, seabed: float) -> np.ndarray:
-    """Mask of the grid voxels around the object: within `FOCUS_MARGIN_M` of its footprint's circle, from above
-    its top down to just under the seabed."""
-    ijk = np.indices(grid.shape).reshape(3, -1).T
-    c = grid.centres(ijk)
-    near = np.hypot(c[:, 0] - target.north, c[:, 1] - target.east) <= target.radius + FOCUS_MARGIN_M
-    level = (c[:, 2] >= target.top_depth - FOCUS_MARGIN_M) & (c[:, 2] <= seabed + 0.25)
-    return np.asarray((near & level).reshape(grid.shape))
-
-
-def scan_of(frame: ScanFrame) -> Scan:
-    """A scanner frame placed at its estimated pose (flat attitude), as the planner takes it."""
-    origin = np.array([frame.north, frame.east, frame.depth])
-    dirs = frame.directions_body @ rotation_zyx(frame.heading).T
-    return Scan(origin, origin + dirs * frame.ranges[:, None], frame.hit)
-
-
-def mount_tilt_deg(frame: ScanFrame) -> float:
-    """The scanner's downward tilt, from the mean direction of its rays."""
-    mean = frame.directions_body.mean(axis=0)
-    return math.degrees(math.asin(float(mean[2] / np.linalg.norm(mean))))
-
-
-@dataclass
-class TargetRun:
-    """One target's exploration: its planner and what happened."""
-
-    target: Target
-    planner: FixedMountNbv
-    lo: np.ndarray
-    hi: np.ndarray
-    seabed: float
-    start: View
-    views: list[tuple[float, float, float, float, float]] = field(default_factory=list)
-    iterations_ms: list[float] = field(default_factory=list)
-    integrate_ms: list[float] = field(default_factory=list)
-    volume: list[tuple[float, float, float]] = field(default_factory=list)  # time, known m³, coverage estimate
-    rejected: int = 0
-    replans: int = 0
-    stop_reason: str = ""
-    estimate: float = 0.0
-    focus_done_at: float | None = None
-    """When the object's region had nothing left to reveal (then the whole box is explored)."""
-
-    def object_voxels(self) -> np.ndarray:
-        """Flat grid ids of the occupied voxels that belong to the object (above the seabed, over its footprint)."""
-        grid = self.planner.grid
-        ids = grid.occupied_ids
-        c = grid.centres(np.stack(np.unravel_index(ids, grid.shape), axis=1))
-        t = self.target
-        near = np.hypot(c[:, 0] - t.north, c[:, 1] - t.east) <= t.radius + 1.5
-        return np.asarray(ids[near & (c[:, 2] < self.seabed - 0.4)])
-
-    def expected_voxels(self) -> float:
-        """Surface voxels the detection's box would have: its top and four sides."""
-        t, res = self.target, self.planner.grid.resolution
-        height = max(self.seabed - t.top_depth, 0.0)
-        return (t.length * t.width + 2.0 * (t.length + t.width) * height) / res**2
-
-    def coverage_estimate(self) -> float:
-        """The map's own estimate of the object's observed surface: the share of its mapped voxels off the open
-        contour (seen with their surroundings), times how many are mapped against what its detected box would
-        have (so that a few voxels seen early do not pass for a finished model)."""
-        ids = self.object_voxels()
-        if not len(ids):
-            return 0.0
-        open_edge = self.planner.derived.contour.reshape(-1)[ids]
-        return float((1.0 - open_edge.mean()) * min(1.0, len(ids) / max(self.expected_voxels(), 1.0)))
+    APPROACH = "approach"  # cruise at a depth clear of the object, then descend onto the start view
+    MOVE = "move"  # station keeping along the path to the next view
+    SETTLE = "settle"  # at the view until the scanner faces its heading and a frame has been taken
+    PROPOSE = "propose"  # the planner picks the next view
+    LEAVE = "leave"  # climb back to the depth the element began at
 
 
 class ExploreAgent(Agent):
+    """Next-best-view scanning or a photo survey (`photo_survey.PhotoSurveyRun`) of the objects to explore."""
+
     kind = "explore"
 
     def start(self, context: AgentContext) -> None:
@@ -177,7 +93,7 @@ class ExploreAgent(Agent):
         self.targets = targets(p.object, m, context.knowledge)
         self.runs: list[TargetRun] = []
         self.track: list[tuple[float, float, float, float]] = []
-        self.details = {"planner": p.planner, "objects": [], "views": 0}
+        self.details = self.report = ExploreReport(p.planner)
         if p.planner == "rrt-photo":
             from mission.agents.photo_survey import PhotoSurveyRun
 
@@ -195,7 +111,7 @@ class ExploreAgent(Agent):
         self.payload = frozenset({"scanner"})
         self.tilt: float | None = None
         self.index = -1
-        self.phase = "approach"
+        self.phase = Phase.APPROACH
         self.run: TargetRun | None = None
         self.path: StationPath | None = None
         self.goal: View | None = None
@@ -237,7 +153,7 @@ class ExploreAgent(Agent):
             return
         self.run = TargetRun(target, planner, lo, hi, seabed, start)
         self.runs.append(self.run)
-        self.phase = "approach"
+        self.phase = Phase.APPROACH
         self.rejections = 0
 
     def _start_view(self, planner: FixedMountNbv, target: Target, seabed: float, nav: NavState) -> View | None:
@@ -277,18 +193,18 @@ class ExploreAgent(Agent):
             self._integrate(frame)
         budget_left = self.params.budget - (nav.time - self.t0)
         climb = max(0.0, nav.depth - self.exit_depth) / CLIMB_RATE + 15.0
-        if self.phase != "leave" and budget_left <= climb:
+        if self.phase is not Phase.LEAVE and budget_left <= climb:
             if self.run is not None:
                 self.run.stop_reason = self.run.stop_reason or "budget"
             self._leave()
         here = np.array([nav.north, nav.east, nav.depth])
-        if self.phase == "approach":
+        if self.phase is Phase.APPROACH:
             return self._approach(nav, here)
-        if self.phase == "move":
+        if self.phase is Phase.MOVE:
             return self._move(nav, here)
-        if self.phase == "settle":
+        if self.phase is Phase.SETTLE:
             return self._settle(nav, here)
-        if self.phase == "propose":
+        if self.phase is Phase.PROPOSE:
             return self._propose(nav, here)
         return self._climb(nav)
 
@@ -298,13 +214,13 @@ class ExploreAgent(Agent):
             for other in self.runs:
                 other.planner.pitch_deg = -self.tilt
         run = self.run
-        if run is None or self.phase == "leave":
+        if run is None or self.phase is Phase.LEAVE:
             return
         # Frames from (nearly) the pose of the last one add little to the planner's map but cost as much: they
         # are skipped, except the first frame at a view. The metric `surface_observed_percent` counts every
         # frame the sensor took (the simulator logs their true hits), fused or not.
         pose = (frame.north, frame.east, frame.depth, frame.heading)
-        wanted = self.phase == "settle" and self.aligned_at is not None and self.last_scan <= self.aligned_at
+        wanted = self.phase is Phase.SETTLE and self.aligned_at is not None and self.last_scan <= self.aligned_at
         if self.last_pose is not None and not wanted:
             moved = math.dist(pose[:3], self.last_pose[:3])
             turned = abs(wrap_deg(pose[3] - self.last_pose[3]))
@@ -320,10 +236,10 @@ class ExploreAgent(Agent):
         self.last_scan = frame.time
         # What a frame reveals can make the rest of the path unsafe; checked every other frame (1 s at 2 Hz, 30 cm
         # of travel at the hover speed), since it costs a distance transform of the safety grid.
-        if self.phase == "move" and self.path is not None and len(run.integrate_ms) % 2 == 0 \
+        if self.phase is Phase.MOVE and self.path is not None and len(run.integrate_ms) % 2 == 0 \
                 and not self._path_still_safe(self.path):
             run.replans += 1
-            self.phase = "propose"
+            self.phase = Phase.PROPOSE
 
     def _path_still_safe(self, path: StationPath) -> bool:
         assert self.run is not None
@@ -345,14 +261,14 @@ class ExploreAgent(Agent):
     def _go(self, view: View, points: np.ndarray) -> None:
         self.goal = view
         self.path = StationPath(points)
-        self.phase = "move"
+        self.phase = Phase.MOVE
         self.aligned_at = None
 
     def _move(self, nav: NavState, here: np.ndarray) -> Command:
         assert self.path is not None and self.goal is not None
         carrot = self.path.carrot(here)
         if self.path.done:
-            self.phase = "settle"
+            self.phase = Phase.SETTLE
         return Command(self.goal.heading_deg, 0.0, depth=float(carrot[2]), station=(float(carrot[0]),
                                                                                       float(carrot[1])))
 
@@ -369,7 +285,7 @@ class ExploreAgent(Agent):
                 self.aligned_at = nav.time
         elif self.last_scan > self.aligned_at:
             self.run.views.append((nav.time, nav.north, nav.east, nav.depth, nav.heading))
-            self.phase = "propose"
+            self.phase = Phase.PROPOSE
         return self._hold()
 
     def _propose(self, nav: NavState, here: np.ndarray) -> Command:
@@ -378,7 +294,7 @@ class ExploreAgent(Agent):
         run.estimate = run.coverage_estimate()
         if run.estimate >= COVERAGE_TARGET:
             self._next_target(nav, "coverage target")
-            return self._hold() if self.phase != "approach" else self._approach(nav, here)
+            return self._hold() if self.phase is not Phase.APPROACH else self._approach(nav, here)
         t0 = time.perf_counter()
         pose = View.at(here, nav.heading, -(self.tilt or 25.0))
         view = run.planner.propose(pose)
@@ -390,7 +306,7 @@ class ExploreAgent(Agent):
             return self._hold()
         if view is None:
             self._next_target(nav, "nothing left to reveal")
-            return self._hold() if self.phase not in ("approach",) else self._approach(nav, here)
+            return self._hold() if self.phase is not Phase.APPROACH else self._approach(nav, here)
         path = connect(run.planner.safety, here, view.point, self.safe, seed=self.context.mission.seed)
         run.iterations_ms.append(1e3 * (time.perf_counter() - t0))
         if path is None:
@@ -405,7 +321,7 @@ class ExploreAgent(Agent):
         return self._move(nav, here)
 
     def _leave(self) -> None:
-        self.phase = "leave"
+        self.phase = Phase.LEAVE
         self.payload = frozenset()
         self.path = None
 
@@ -422,13 +338,13 @@ class ExploreAgent(Agent):
         if not hasattr(self, "params"):
             return
         if self.photo is not None:
-            self.photo.finish(self.details)
+            self.photo.finish(self.report)
             return
         occupied: list[np.ndarray] = []
         views: list[tuple[float, ...]] = []
         volume: list[tuple[float, ...]] = []
         boxes: list[list[float]] = []
-        objects: list[dict[str, object]] = []
+        objects: list[ExploredObject] = []
         for k, run in enumerate(self.runs):
             grid = run.planner.grid
             ids = grid.occupied_ids
@@ -439,9 +355,9 @@ class ExploreAgent(Agent):
             boxes.append([*run.lo, *run.hi])
             it = run.iterations_ms
             run.estimate = run.coverage_estimate() if run.stop_reason != "no safe starting view" else 0.0
-            objects.append({
-                "id": run.target.id, "source": run.target.source, "north": round(run.target.north, 2),
-                "east": round(run.target.east, 2), "views": len(run.views),
+            objects.append(ExploredObject(run.target.id, run.target.source, round(run.target.north, 2),
+                                          round(run.target.east, 2), {
+                "views": len(run.views),
                 "stop_reason": run.stop_reason or "element ended",
                 "object_region_done_s": None if run.focus_done_at is None else round(run.focus_done_at - self.t0, 1),
                 "coverage_estimate_percent": round(100.0 * run.estimate, 1),
@@ -449,14 +365,14 @@ class ExploreAgent(Agent):
                 "iteration_time_ms": {"mean": round(float(np.mean(it)), 1) if it else None,
                                       "max": round(float(np.max(it)), 1) if it else None},
                 "scan_integration_ms": round(float(np.mean(run.integrate_ms)), 1) if run.integrate_ms else None,
-                "object_voxels_mapped": int(len(run.object_voxels()))})
+                "object_voxels_mapped": int(len(run.object_voxels()))}))
         all_it = [t for r in self.runs for t in r.iterations_ms]
-        self.details.update({
-            "objects": objects, "views": sum(len(r.views) for r in self.runs),
+        self.report.objects, self.report.views = objects, sum(len(r.views) for r in self.runs)
+        self.report.resolution_m = RESOLUTION_M
+        self.report.figures.update({
             "iteration_time_ms": {"mean": round(float(np.mean(all_it)), 1) if all_it else None,
                                   "max": round(float(np.max(all_it)), 1) if all_it else None},
-            "resolution_m": RESOLUTION_M, "safe_distance_m": self.params.safe_distance,
-            "planning_distance_m": self.safe,
+            "safe_distance_m": self.params.safe_distance, "planning_distance_m": self.safe,
             "scanner_tilt_deg": round(self.tilt, 2) if self.tilt is not None else None})
         self.context.knowledge.maps[self.context.element.id] = {
             "explore_occupied": np.concatenate(occupied).astype(np.float32) if occupied else np.zeros((0, 4)),

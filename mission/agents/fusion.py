@@ -1,24 +1,38 @@
 """Fusing several referenced views of one object (seed 000, approach 3): keep the largest group of views whose
 own transforms agree, then one least-squares transform from all their points, each view's points placed in the
-world with that view's (dead-reckoned) camera pose."""
+common frame (the world, or the object's tracked frame) with that view's camera pose."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 
-from mission.frames import transform_points
+from mission.geometry import rigid_transform, transform_points
 
-View = tuple[np.ndarray, np.ndarray]  # (identified model points (k, 3), the same points in the world (k, 3))
+View = tuple[np.ndarray, np.ndarray]  # (identified model points (k, 3), the same points in the common frame (k, 3))
 VIEW_AGREEMENT_M = 0.05  # views whose transforms place the points this close agree
+
+
+class Fused(NamedTuple):
+    """One transform from agreeing views: T_frame_object, how many views and points it used, its residual RMS."""
+
+    T: np.ndarray
+    views: int
+    residual_m: float
+    points: int
 
 
 def consistent_views(views: Sequence[View], agreement: float = VIEW_AGREEMENT_M) -> list[View]:
     """The largest group of views that agree with one another (a wrong identification that slipped through
-    would otherwise pull the fused transform)."""
-    from perception_plugins.referencing import rigid_transform
+    would otherwise pull the fused transform).
 
+    >>> model = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    >>> wrong = (model, model + [0.3, 0.0, 0.0])
+    >>> len(consistent_views([(model, model), (model, model + 0.01), wrong]))
+    2
+    """
     if not views:
         return []
     probe = np.vstack([m for m, _ in views])
@@ -29,17 +43,14 @@ def consistent_views(views: Sequence[View], agreement: float = VIEW_AGREEMENT_M)
     return [views[j] for j in max(agree, key=len)]
 
 
-def fuse_views(views: Sequence[View], minimum: int = 2, agreement: float = VIEW_AGREEMENT_M
-               ) -> tuple[np.ndarray, int, float, int] | None:
-    """T_world_object from the views that agree within `agreement` (m), with the number of views and points
+def fuse_views(views: Sequence[View], minimum: int = 2, agreement: float = VIEW_AGREEMENT_M) -> Fused | None:
+    """T_frame_object from the views that agree within `agreement` (m), with the number of views and points
     used and the residual RMS (m); None while fewer than `minimum` views agree."""
-    from perception_plugins.referencing import rigid_transform
-
     agreeing = consistent_views(views, agreement)
     if len(agreeing) < minimum:
         return None
     model = np.vstack([m for m, _ in agreeing])
-    world = np.vstack([w for _, w in agreeing])
-    T = rigid_transform(model, world)
-    residual = float(np.sqrt(np.mean(np.sum((transform_points(T, model) - world) ** 2, axis=1))))
-    return T, len(agreeing), residual, len(model)
+    common = np.vstack([w for _, w in agreeing])
+    T = rigid_transform(model, common)
+    residual = float(np.sqrt(np.mean(np.sum((transform_points(T, model) - common) ** 2, axis=1))))
+    return Fused(T, len(agreeing), residual, len(model))

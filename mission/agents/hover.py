@@ -10,6 +10,7 @@ from mission.frames import wrap_deg
 from mission.vehicle import Command, NavState
 
 STATION_M = 4.0  # within this distance the vehicle station-keeps instead of cruising
+WORK_SPEED_M_S = 1.0  # the top speed through the water from view to view over an object (the cruise speed if lower)
 DEPTH_TOLERANCE_M = 0.3
 HEADING_TOLERANCE_DEG = 3.0
 

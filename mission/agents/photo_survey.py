@@ -22,6 +22,7 @@ from shapely.geometry import Polygon
 
 from mission.agents.base import AgentContext
 from mission.agents.explore_region import Target, prior_map, survey_map_for
+from mission.agents.report import ExploredObject, ExploreReport
 from mission.agents.waypoints import PathFollower
 from mission.vehicle import Command, Observation
 from planners.rrt import ClearanceGrid, InformationField, PhotoSurvey, photo_survey_path
@@ -138,9 +139,9 @@ class PhotoSurveyRun:
         depth = float(plan.path[0, 2]) if self.phase == "survey" else self.cruise_depth
         return Command(heading, SURVEY_SPEED, depth=depth)
 
-    def finish(self, details: dict[str, Any]) -> None:
+    def finish(self, report: ExploreReport) -> None:
         """Photo coverage per target and the products for the run folder."""
-        objects = []
+        objects: list[ExploredObject] = []
         for t, plan, _ in self.plans:
             taken = [p for p in self.photos if p["target"] == t.id]
             shapes = [footprint_polygon(p["north"], p["east"], p["heading"],
@@ -149,16 +150,16 @@ class PhotoSurveyRun:
                       for p in taken]
             obj = Polygon([(e, n) for n, e in target_area(t, 0.0)])
             covered = shapely.union_all(shapes).intersection(obj).area / obj.area if shapes else 0.0
-            objects.append({"id": t.id, "source": t.source, "north": round(t.north, 2), "east": round(t.east, 2),
+            objects.append(ExploredObject(t.id, t.source, round(t.north, 2), round(t.east, 2), {
                             "photos": len(taken), "passes": len(plan.passes),
                             "planned_photos": int(len(plan.photo_points)), "altitude_m": round(self.altitude, 2),
                             "planned_length_m": round(plan.length, 1),
-                            "photo_coverage_percent": round(100.0 * covered, 2)})
-        details.update({"objects": objects, "views": len(self.photos),
-                        "photo_coverage_percent": round(float(np.mean([o["photo_coverage_percent"]
-                                                                         for o in objects])), 2) if objects else 0.0,
-                        "camera_fov_deg": [round(v, 2) for v in self.fov],
-                        "photo_times": [round(p["time"], 3) for p in self.photos]})
+                            "photo_coverage_percent": round(100.0 * covered, 2)}))
+        report.objects, report.views = objects, len(self.photos)
+        report.figures["photo_coverage_percent"] = round(float(np.mean(
+            [o.figures["photo_coverage_percent"] for o in objects])), 2) if objects else 0.0
+        report.camera_fov_deg = [round(v, 2) for v in self.fov]
+        report.photo_times = [round(p["time"], 3) for p in self.photos]
         index = np.array([[p["time"], p["north"], p["east"], p["depth"], p["heading"]] for p in self.photos],
                          dtype=float).reshape(-1, 5)
         products: dict[str, Any] = {

@@ -16,6 +16,7 @@ import shapely
 from shapely.geometry import Polygon
 
 from mission.agents.base import Agent, AgentContext
+from mission.agents.report import SurveyDetection, SurveyReport
 from mission.agents.waypoints import PathFollower
 from mission.knowledge import DetectedObject, Knowledge
 from mission.language.models import KnownObject, Survey
@@ -85,9 +86,8 @@ class SurveyAgent(Agent):
                                  cell=max(p.resolution, GRID_CELL_M))
         self.pings = 0
         self.sigmas: list[float] = []
-        self.details = {"spacing_m": round(self.spacing, 2), "heading_deg": round(self.plan.heading_deg, 1),
-                        "planned_length_m": round(self.plan.length_m, 1), "turns": self.plan.turns,
-                        "cells": self.plan.cells}
+        self.details = self.report = SurveyReport(round(self.spacing, 2), round(self.plan.heading_deg, 1),
+                                                  round(self.plan.length_m, 1), self.plan.turns, self.plan.cells)
 
     def planned_path(self) -> list[tuple[float, float]]:
         return self.follower.points
@@ -117,20 +117,18 @@ class SurveyAgent(Agent):
         knowledge: Knowledge = self.context.knowledge
         element = self.context.element.id
         database = self.context.mission.objects
-        detections = []
+        detections: list[SurveyDetection] = []
         for k, d in enumerate(products.pop("detections")):
             db_id = match_database(d, database)
             obj = DetectedObject(id=db_id or f"{element}-{k + 1}", north=d.north, east=d.east, length=d.length,
                                  width=d.width, height=d.height, heading_deg=d.heading_deg, depth=d.top_depth,
                                  database_id=db_id, element=element)
             knowledge.detections.append(obj)
-            detections.append({"id": obj.id, "north": round(d.north, 2), "east": round(d.east, 2),
-                               "length": round(d.length, 2), "width": round(d.width, 2),
-                               "height": round(d.height, 2), "heading_deg": round(d.heading_deg, 1),
-                               "matched_id": db_id})
+            detections.append(SurveyDetection(obj.id, round(d.north, 2), round(d.east, 2), round(d.length, 2),
+                                              round(d.width, 2), round(d.height, 2), round(d.heading_deg, 1), db_id))
         knowledge.maps[element] = {**products, "lines": [line.tolist() for line in self.plan.lines]}
-        self.details.update({"coverage_percent": round(products["coverage_percent"], 2), "pings": self.pings,
-                             "detections": detections})
+        self.report.coverage_percent = round(products["coverage_percent"], 2)
+        self.report.pings, self.report.detections = self.pings, detections
 
 
 def survey_products(grid: SoundingGrid, p: Survey, nav_sigma: float, detect: bool = True) -> dict[str, Any]:

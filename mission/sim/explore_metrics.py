@@ -22,12 +22,14 @@ object area); `photo_coverage_true_percent` places the same photographs at the t
 
 from __future__ import annotations
 
+import copy
 import math
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from mission.agents.report import ExploredObject, ExploreReport
 from mission.executive import ElementReport
 from mission.frames import rotation_zyx
 from mission.knowledge import Knowledge
@@ -131,35 +133,36 @@ def _contains(keys: NDArray[np.int64], query: NDArray[np.int64]) -> NDArray[np.b
     return np.isin(flat(query), flat(keys))
 
 
-def _true_object(entry: dict[str, Any], scene: Scene) -> PlacedObject | None:
-    by_id = next((o for o in scene.objects if entry.get("source") == "database"
-                  and (o.database == entry["id"] or o.id == entry["id"])), None)
+def _true_object(entry: ExploredObject, scene: Scene) -> PlacedObject | None:
+    by_id = next((o for o in scene.objects if entry.source == "database"
+                  and (o.database == entry.id or o.id == entry.id)), None)
     if by_id is not None:
         return by_id
-    best = min(scene.objects, key=lambda o: math.hypot(o.footprint.centroid.y - entry["north"],
-                                                         o.footprint.centroid.x - entry["east"]), default=None)
+    best = min(scene.objects, key=lambda o: math.hypot(o.footprint.centroid.y - entry.north,
+                                                         o.footprint.centroid.x - entry.east), default=None)
     if best is None:
         return None
     c = best.footprint.centroid
-    return best if math.hypot(c.y - entry["north"], c.x - entry["east"]) <= MATCH_RADIUS_M else None
+    return best if math.hypot(c.y - entry.north, c.x - entry.east) <= MATCH_RADIUS_M else None
 
 
-def _photo_truth(item: dict[str, Any], rows: Array, scene: Scene, safe_distance: float) -> None:
+def _photo_truth(report: ExploreReport, item: dict[str, Any], rows: Array, scene: Scene,
+                 safe_distance: float) -> None:
     """`photo_coverage_true_percent`: the true object's footprint inside the union of the photographs'
     footprints placed at the vehicle's TRUE poses (at the true depth of the object's top)."""
     from shapely import union_all
 
     from mission.agents.photo_survey import footprint_polygon
 
-    fov = item.get("camera_fov_deg")
+    fov = report.camera_fov_deg
     if not fov or not len(rows):
         return
-    for entry in item.get("objects", []):
-        obj = _true_object(entry, scene)
+    for explored, entry in zip(report.objects, item["objects"], strict=True):
+        obj = _true_object(explored, scene)
         if obj is None:
             continue
         shapes = []
-        for t in np.asarray(item.get("photo_times", []), dtype=np.float64):
+        for t in np.asarray(report.photo_times or [], dtype=np.float64):
             r = rows[int(np.argmin(np.abs(rows[:, 0] - t)))]
             altitude = obj.top_depth - r[3]
             shapes.append(footprint_polygon(r[1], r[2], r[4], 2 * altitude * math.tan(math.radians(fov[0] / 2)),
@@ -169,18 +172,20 @@ def _photo_truth(item: dict[str, Any], rows: Array, scene: Scene, safe_distance:
         entry["photo_coverage_true_percent"] = round(100.0 * covered, 2)
         d = float(distance_to_object(rows[:, 1:4], obj).min())
         entry["min_distance_to_object_m"] = round(d, 3)
-    shares = [e["photo_coverage_true_percent"] for e in item.get("objects", []) if "photo_coverage_true_percent" in e]
+    shares = [e["photo_coverage_true_percent"] for e in item["objects"] if "photo_coverage_true_percent" in e]
     if shares:
         item["photo_coverage_true_percent"] = round(float(np.mean(shares)), 2)
-    distances = [e["min_distance_to_object_m"] for e in item.get("objects", []) if "min_distance_to_object_m" in e]
+    distances = [e["min_distance_to_object_m"] for e in item["objects"] if "min_distance_to_object_m" in e]
     if distances:
         item["min_distance_to_object_m"] = min(distances)
         item["safe_distance_breached"] = bool(min(distances) < safe_distance)
 
 
-def explore_truth(item: dict[str, Any], rep: ElementReport, knowledge: Knowledge, vehicle: SimulatedVehicle,
-                  scene: Scene, safe_distance: float) -> None:
-    """Add the truth-based explore metrics to an element's metrics `item` (see the module docstring)."""
+def explore_truth(report: ExploreReport, rep: ElementReport, knowledge: Knowledge, vehicle: SimulatedVehicle,
+                  scene: Scene, safe_distance: float) -> dict[str, Any]:
+    """An explore element's fields of `metrics.json`: the report's, with the truth-based metrics of the module
+    docstring added."""
+    item = copy.deepcopy(report.as_json())
     log = np.array([r[:14] for r in vehicle.log.rows], dtype=np.float64).reshape(-1, 14)
     rows: Array = log[(log[:, 0] > rep.start_time) & (log[:, 0] <= rep.end_time)]
     track = rows[:, 1:4] if len(rows) else np.zeros((0, 3))
@@ -191,10 +196,10 @@ def explore_truth(item: dict[str, Any], rep: ElementReport, knowledge: Knowledge
         item["navigation_error_m"] = {"mean": round(float(err.mean()), 3), "max": round(float(err.max()), 3)}
         seabed = scene.seabed.depths_at(track[:, 0], track[:, 1])
         item["min_distance_to_seabed_m"] = round(float(np.min(seabed - track[:, 2])), 3)
-    if item.get("planner") == "rrt-photo":
-        _photo_truth(item, rows, scene, safe_distance)
-        return
-    resolution = float(item.get("resolution_m", 0.25))
+    if report.planner == "rrt-photo":
+        _photo_truth(report, item, rows, scene, safe_distance)
+        return item
+    resolution = report.resolution_m if report.resolution_m is not None else 0.25
     hits = [p for t, _, p in vehicle.log.scans if rep.start_time <= t <= rep.end_time and len(p)]
     observed = np.unique(np.floor(np.concatenate(hits) / resolution).astype(np.int64), axis=0) if hits \
         else np.zeros((0, 3), dtype=np.int64)
@@ -206,8 +211,8 @@ def explore_truth(item: dict[str, Any], rep: ElementReport, knowledge: Knowledge
         offsets = np.stack(np.meshgrid(*[np.arange(-1, 2)] * 3, indexing="ij"), axis=-1).reshape(-1, 3)
         grown = np.unique((keys[:, None, :] + offsets[None]).reshape(-1, 3), axis=0)
     min_distances, observed_shares, map_shares = [], [], []
-    for entry in item.get("objects", []):
-        obj = _true_object(entry, scene)
+    for explored, entry in zip(report.objects, item["objects"], strict=True):
+        obj = _true_object(explored, scene)
         if obj is None:
             entry["true_object"] = None
             continue
@@ -229,3 +234,4 @@ def explore_truth(item: dict[str, Any], rep: ElementReport, knowledge: Knowledge
     if min_distances:
         item["min_distance_to_object_m"] = round(min(min_distances), 3)
         item["safe_distance_breached"] = bool(min(min_distances) < safe_distance)
+    return item

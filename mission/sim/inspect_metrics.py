@@ -3,12 +3,15 @@ target is really in the picture, and how far visual odometry drifted between ref
 
 from __future__ import annotations
 
+import copy
 import math
 from typing import Any
 
 import numpy as np
 
+from mission.agents.report import InspectReport, Photo
 from mission.frames import invert, transform_points
+from mission.language.models import Stereo
 from mission.sim.camera import intrinsics
 from mission.sim.vehicle import SimulatedVehicle
 from mission.world.scene import Scene
@@ -24,54 +27,63 @@ def _frame_pose(frames: dict[float, Any], t: float) -> np.ndarray | None:
     return None if pose is None else np.asarray(pose, dtype=float)
 
 
-def inspect_truth(item: dict[str, Any], vehicle: SimulatedVehicle, scene: Scene) -> None:
-    """Add truth-based figures to an inspect element's metrics (in place)."""
-    mission = vehicle.mission
-    truth = next((o for o in scene.objects if o.database == item.get("object")), None)
-    stereo = mission.sensors.stereo
-    vo = item.get("vo", {})
-    track = vo.pop("track", [])
-    if truth is None or stereo is None:
-        return
-    obj = mission.object(item["object"])
-    at = {t.id: np.asarray(t.at, dtype=float) for t in obj.targets}
+def _photo_truth(photo: Photo, T_world_cam: np.ndarray, T_world_object: np.ndarray, target_object: np.ndarray,
+                 stereo: Stereo) -> dict[str, Any]:
+    """A photograph's true camera error, pointing error, the target's pixel and whether it is in the image."""
     K = intrinsics(stereo)
+    T_object_cam = invert(T_world_object) @ T_world_cam
+    target_world = transform_points(T_world_object, target_object[None, :])[0]
+    p_cam = transform_points(invert(T_world_cam), target_world[None, :])[0]
+    axis = T_world_cam[:3, 2]
+    direction = (target_world - T_world_cam[:3, 3]) / np.linalg.norm(target_world - T_world_cam[:3, 3])
+    u = K[0, 0] * p_cam[0] / p_cam[2] + K[0, 2] if p_cam[2] > 0 else math.nan
+    v = K[1, 1] * p_cam[1] / p_cam[2] + K[1, 2] if p_cam[2] > 0 else math.nan
+    est = np.asarray(photo.T_object_cam_est, dtype=float)
+    viewpoint = np.asarray(photo.viewpoint_object, dtype=float)
+    return {"camera_error_m": round(float(np.linalg.norm(T_object_cam[:3, 3] - viewpoint)), 4),
+            "pointing_error_deg": round(math.degrees(math.acos(float(np.clip(axis @ direction, -1, 1)))), 3),
+            "target_pixel": [round(u, 1), round(v, 1)],
+            "target_in_image": bool(0 <= u < stereo.width and 0 <= v < stereo.height),
+            "pose_estimate_error_m": round(float(np.linalg.norm(est[:3, 3] - T_object_cam[:3, 3])), 4)}
+
+
+def inspect_truth(report: InspectReport, vehicle: SimulatedVehicle, scene: Scene) -> dict[str, Any]:
+    """An inspect element's fields of `metrics.json`: the report's, with the truth-based figures added (the
+    estimated camera poses and the odometry track give way to their errors)."""
+    out = copy.deepcopy(report.as_json())
+    vo = out["vo"]
+    del vo["track"]
+    mission = vehicle.mission
+    truth = next((o for o in scene.objects if o.database == report.object), None)
+    stereo = mission.sensors.stereo
+    if truth is None or stereo is None:
+        return out
+    at = {t.id: np.asarray(t.at, dtype=float) for t in mission.object(report.object).targets}
     frames = dict(vehicle.log.frames)
-    T_object_world = invert(truth.T_world_object)
-    per_target: dict[str, dict[str, Any]] = item.get("targets", {})
-    for photo in item.get("photos", []):
-        T_world_cam = _frame_pose(frames, photo["time"])
+    for photo, entry in zip(report.photos, out["photos"], strict=True):
+        T_world_cam = _frame_pose(frames, photo.time)
         if T_world_cam is None:
             continue
-        T_object_cam = T_object_world @ T_world_cam
-        viewpoint = np.asarray(photo["viewpoint_object"], dtype=float)
-        target_world = transform_points(truth.T_world_object, at[photo["target"]][None, :])[0]
-        p_cam = transform_points(invert(T_world_cam), target_world[None, :])[0]
-        axis = T_world_cam[:3, 2]
-        direction = (target_world - T_world_cam[:3, 3]) / np.linalg.norm(target_world - T_world_cam[:3, 3])
-        u = K[0, 0] * p_cam[0] / p_cam[2] + K[0, 2] if p_cam[2] > 0 else math.nan
-        v = K[1, 1] * p_cam[1] / p_cam[2] + K[1, 2] if p_cam[2] > 0 else math.nan
-        est = np.asarray(photo.pop("T_object_cam_est"), dtype=float)
-        photo["camera_error_m"] = round(float(np.linalg.norm(T_object_cam[:3, 3] - viewpoint)), 4)
-        photo["pointing_error_deg"] = round(math.degrees(math.acos(float(np.clip(axis @ direction, -1, 1)))), 3)
-        photo["target_pixel"] = [round(u, 1), round(v, 1)]
-        photo["target_in_image"] = bool(0 <= u < stereo.width and 0 <= v < stereo.height)
-        photo["pose_estimate_error_m"] = round(float(np.linalg.norm(est[:3, 3] - T_object_cam[:3, 3])), 4)
-    for tid, entry in per_target.items():
-        shots = [p for p in item.get("photos", []) if p["target"] == tid and "camera_error_m" in p]
-        entry["camera_error_max_m"] = max((p["camera_error_m"] for p in shots), default=None)
-        entry["pointing_error_max_deg"] = max((p["pointing_error_deg"] for p in shots), default=None)
-        entry["target_in_every_photo"] = bool(shots) and all(p["target_in_image"] for p in shots)
-        entry["ok"] = bool(entry["photos"] >= entry["photos_requested"] and entry["target_in_every_photo"]
-                           and entry["camera_error_max_m"] is not None
+        del entry["T_object_cam_est"]
+        entry.update(_photo_truth(photo, T_world_cam, truth.T_world_object, at[photo.target], stereo))
+    for tid, outcome in report.targets.items():
+        entry = out["targets"][tid]
+        shots = [e for p, e in zip(report.photos, out["photos"], strict=True) if p.target == tid
+                 and "camera_error_m" in e]
+        entry["camera_error_max_m"] = max((e["camera_error_m"] for e in shots), default=None)
+        entry["pointing_error_max_deg"] = max((e["pointing_error_deg"] for e in shots), default=None)
+        entry["target_in_every_photo"] = bool(shots) and all(e["target_in_image"] for e in shots)
+        entry["ok"] = bool(outcome.done and entry["target_in_every_photo"] and entry["camera_error_max_m"] is not None
                            and entry["camera_error_max_m"] <= CAMERA_TOLERANCE_M)
-    item["targets_ok"] = sum(1 for e in per_target.values() if e.get("ok"))
+    out["targets_ok"] = sum(1 for e in out["targets"].values() if e["ok"])
+    T_object_world = invert(truth.T_world_object)
     errors = []
-    for t, x, y, z in track:
+    for t, x, y, z in report.vo.track:
         T_world_cam = _frame_pose(frames, t)
         if T_world_cam is not None:
             errors.append(float(np.linalg.norm((T_object_world @ T_world_cam)[:3, 3] - np.array([x, y, z]))))
     if errors:
         vo["camera_error_rms_m"] = round(float(np.sqrt(np.mean(np.square(errors)))), 4)
         vo["camera_error_max_m"] = round(max(errors), 4)
-    vo["track_frames"] = len(track)
+    vo["track_frames"] = len(report.vo.track)
+    return out

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 from shapely.geometry import Polygon
 
+from mission.agents.report import ExploreReport, InspectReport, SurveyReport
 from mission.executive import ElementReport, ExecutionReport
 from mission.frames import heading_of, invert, wrap_deg
 from mission.language.models import Mission
@@ -19,11 +20,13 @@ DETECTION_RADIUS_M = 5.0  # a detection this close to a true object's centre is 
 MIN_OBJECT_HEIGHT_M = 1.0  # true objects at least this tall in the area must be detected
 
 
-def _survey_truth(item: dict[str, Any], rep: ElementReport, mission: Mission, scene: Scene) -> None:
-    """Score a survey's detections against the true objects: position errors, false alarms, missed objects."""
+def _survey_truth(report: SurveyReport, rep: ElementReport, mission: Mission, scene: Scene) -> dict[str, Any]:
+    """A survey's fields of `metrics.json`, its detections scored against the true objects: position errors,
+    false alarms, missed objects."""
+    item = copy.deepcopy(report.as_json())
     element = next((e for e in mission.route if e.id == rep.id), None)
     if element is None or element.survey is None:
-        return
+        return item
     p = element.survey
     area = Polygon([(e, n) for n, e in p.area])
     for zone in p.exclude:
@@ -34,16 +37,19 @@ def _survey_truth(item: dict[str, Any], rep: ElementReport, mission: Mission, sc
         seabed = scene.seabed.depth_at(c.y, c.x)
         truth.append((obj.id, c.y, c.x, seabed - obj.top_depth, area.contains(c)))
     found = set()
-    for det in item.get("detections", []):
-        best = min(truth, key=lambda t: math.hypot(t[1] - det["north"], t[2] - det["east"]), default=None)
+    detections = report.detections or []
+    entries: list[dict[str, Any]] = item.get("detections", [])
+    for det, entry in zip(detections, entries, strict=True):
+        best = min(truth, key=lambda t: math.hypot(t[1] - det.north, t[2] - det.east), default=None)
         if best is not None:
-            err = math.hypot(best[1] - det["north"], best[2] - det["east"])
-            det["true_object"] = best[0] if err <= DETECTION_RADIUS_M else None
-            det["position_error_m"] = round(err, 3) if err <= DETECTION_RADIUS_M else None
+            err = math.hypot(best[1] - det.north, best[2] - det.east)
+            entry["true_object"] = best[0] if err <= DETECTION_RADIUS_M else None
+            entry["position_error_m"] = round(err, 3) if err <= DETECTION_RADIUS_M else None
             if err <= DETECTION_RADIUS_M:
                 found.add(best[0])
-    item["false_alarms"] = sum(1 for d in item.get("detections", []) if d.get("true_object") is None)
+    item["false_alarms"] = sum(1 for e in entries if e.get("true_object") is None)
     item["missed"] = [t[0] for t in truth if t[4] and t[3] >= MIN_OBJECT_HEIGHT_M and t[0] not in found]
+    return item
 
 
 def _reference_truth(item: dict[str, Any], vehicle: SimulatedVehicle, scene: Scene) -> None:
@@ -86,22 +92,23 @@ def _element_metrics(report: ExecutionReport, times: np.ndarray, north: np.ndarr
             item["path_length_m"] = round(float(step[window].sum()), 2)
             if window.any():  # the true altitude above whatever lies below (seabed or object)
                 item["min_altitude_m"] = round(float(altitude[window].min()), 3)
-        item.update(copy.deepcopy(rep.details))
-        if rep.kind == "survey":
-            _survey_truth(item, rep, mission, scene)
-        if rep.kind == "explore":
+        details = rep.details
+        if rep.kind == "survey" and isinstance(details, SurveyReport):
+            item.update(_survey_truth(details, rep, mission, scene))
+        elif rep.kind == "explore" and isinstance(details, ExploreReport):
             from mission.sim.explore_metrics import explore_truth
 
             element = next((e for e in mission.route if e.id == rep.id), None)
             safe = element.explore.safe_distance if element is not None and element.explore is not None else 0.0
-            explore_truth(item, rep, report.knowledge, vehicle, scene, safe)
-        if rep.kind == "reference":
-            _reference_truth(item, vehicle, scene)
-        if rep.kind == "inspect":
+            item.update(explore_truth(details, rep, report.knowledge, vehicle, scene, safe))
+        elif rep.kind == "inspect" and isinstance(details, InspectReport):
             from mission.sim.inspect_metrics import inspect_truth
 
+            item.update(inspect_truth(details, vehicle, scene))
+        else:
+            item.update(copy.deepcopy(details.as_json()))
+        if rep.kind in ("reference", "inspect"):
             _reference_truth(item, vehicle, scene)
-            inspect_truth(item, vehicle, scene)
         out.append(item)
     return out
 

@@ -17,7 +17,15 @@ from mission.navigation import NavigationFilter
 from mission.plugin_api import StereoImages
 from mission.sim import kinematics
 from mission.sim.kinematics import TrueState
-from mission.vehicle import HOVER_GAIN, HOVER_SPEED, Command, NavState, Observation, ScanFrame, SonarPing
+from mission.vehicle import (
+    HOVER_GAIN,
+    STATION_KEEPING_SPEED_M_S,
+    Command,
+    NavState,
+    Observation,
+    ScanFrame,
+    SonarPing,
+)
 from mission.world.scene import Scene
 
 HEADING_SIGMA_DEG = 0.3
@@ -230,7 +238,7 @@ class SimulatedVehicle:
         hover = None
         if cmd.station is not None:  # station keeping on the estimate
             en, ee = cmd.station[0] - self.filter.north, cmd.station[1] - self.filter.east
-            gain = min(HOVER_GAIN, HOVER_SPEED / max(math.hypot(en, ee), 1e-9))
+            gain = min(HOVER_GAIN, STATION_KEEPING_SPEED_M_S / max(math.hypot(en, ee), 1e-9))
             hover = (gain * en, gain * ee)
         kinematics.step(t, cmd.heading, cmd.speed, depth_cmd, self.heading_meas, self.depth_meas, v,
                         self.scene.current, dt, hover)
