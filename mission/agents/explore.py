@@ -33,33 +33,33 @@ import time
 import numpy as np
 
 from mission.agents.base import Agent, AgentContext, Status
-from mission.agents.explore_nbv import FixedMountNbv, TargetRun, mount_tilt_deg, object_region, scan_of
+from mission.agents.explore_nbv import (
+    RESOLUTION_M,
+    FixedMountNbv,
+    TargetRun,
+    mount_tilt_deg,
+    nbv_results,
+    path_safe,
+    scan_of,
+    target_run,
+)
 from mission.agents.explore_region import (
-    Target,
-    exploration_box,
-    prior_map,
-    seabed_depth,
-    survey_map_for,
     targets,
 )
-from mission.agents.report import ExploredObject, ExploreReport
+from mission.agents.report import ExploreReport
 from mission.agents.station_path import StationPath
 from mission.frames import wrap_deg
 from mission.language.models import Explore
 from mission.vehicle import Command, NavState, Observation, ScanFrame
-from planners.nbv import NbvPlanner, Scanner, View, Weights, connect, segment_safe
-from planners.nbv.candidates import is_safe_view
-from planners.nbv.grid import FREE, UNKNOWN
+from planners.nbv import NbvPlanner, Scanner, View, Weights, connect
+from planners.nbv.grid import UNKNOWN
 
-RESOLUTION_M = 0.25
 PLANNING_RAYS = (24, 18)  # the planner's model of the frustum; the sensor itself has more rays
 NAV_MARGIN_M = 1.0
 COVERAGE_TARGET = 0.97
 MAX_REJECTIONS = 10
 HEADING_TOLERANCE_DEG = 6.0
 CLIMB_RATE = 0.35  # m/s, a conservative figure for the time needed to climb away at the end
-PRIOR_UNCERTAIN_M = 0.5  # the survey's soundings are 0.5 m cell means: the last 0.5 m above them stays unknown
-MIN_UNKNOWN = 4  # a view that would reveal fewer unknown voxels of the object's region is not worth the move
 APPROACH_HANDOVER_M = 2.0  # cruising ends, station keeping begins, this far from the point above the start view
 MIN_FRAME_MOVE_M = 0.4  # a frame is fused into the planner's map when the vehicle has moved or turned this much
 MIN_FRAME_TURN_DEG = 5.0
@@ -135,42 +135,17 @@ class ExploreAgent(Agent):
             return
         target = self.targets[self.index]
         self.cruise_depth = min(nav.depth, target.top_depth - self.safe - 1.0)
-        lo, hi = exploration_box(target, self.safe, self.model.max_range, ceiling=self.cruise_depth - 1.0)
-        products = survey_map_for(self.context.knowledge, target)
-        vm = prior_map(products, lo, hi, RESOLUTION_M, uncertain=PRIOR_UNCERTAIN_M)
-        seabed = seabed_depth(products, target, target.radius + 1.0)
-        planner = FixedMountNbv(vm, lo, hi, self.model, weights=self.weights, safe_distance=self.safe,
-                                seed=self.context.mission.seed + self.index)
-        planner.focus = object_region(planner.grid, target, seabed)
-        planner.min_unknown = MIN_UNKNOWN  # the object's region alone holds few unknown voxels a view can reach
-        start = self._start_view(planner, target, seabed, nav)
-        if start is None:
+        run = target_run(target, self.context.knowledge, self.model, self.weights, self.safe, self.cruise_depth - 1.0,
+                         self.context.mission.seed + self.index, (nav.north, nav.east),
+                         self.tilt if self.tilt is not None else 25.0)
+        self.runs.append(run)
+        self.run = run
+        if run.stop_reason:
             self.context.emit("explore_no_start", nav.time, element=self.context.element.id, object=target.id)
-            self.runs.append(TargetRun(target, planner, lo, hi, seabed, View.at(target.centre),
-                                       stop_reason="no safe starting view"))
-            self.run = self.runs[-1]
             self._next_target(nav)
             return
-        self.run = TargetRun(target, planner, lo, hi, seabed, start)
-        self.runs.append(self.run)
         self.phase = Phase.APPROACH
         self.rejections = 0
-
-    def _start_view(self, planner: FixedMountNbv, target: Target, seabed: float, nav: NavState) -> View | None:
-        """A safe, known-free view facing the object, on the vehicle's side of it, as near the ideal as found."""
-        bearing = math.atan2(nav.east - target.east, nav.north - target.north)
-        depth0 = seabed - self.safe - 1.5
-        for dr in (2.0, 3.0, 4.0, 5.0):
-            for dd in (0.0, -1.0, -2.0, -3.0):
-                for da in np.radians([0, 20, -20, 40, -40, 60, -60, 90, -90, 120, -120, 150, -150, 180]):
-                    r = target.radius + self.safe + dr
-                    p = np.array([target.north + r * math.cos(bearing + da), target.east + r * math.sin(bearing + da),
-                                  depth0 + dd])
-                    if planner.grid.state(p[None])[0] == FREE and is_safe_view(planner.safety, p[None],
-                                                                                 self.safe)[0]:
-                        heading = math.degrees(math.atan2(target.east - p[1], target.north - p[0])) % 360.0
-                        return View.at(p, heading, -(self.tilt if self.tilt is not None else 25.0))
-        return None
 
     def planned_path(self) -> list[tuple[float, float]]:
         if self.photo is not None:
@@ -237,15 +212,9 @@ class ExploreAgent(Agent):
         # What a frame reveals can make the rest of the path unsafe; checked every other frame (1 s at 2 Hz, 30 cm
         # of travel at the hover speed), since it costs a distance transform of the safety grid.
         if self.phase is Phase.MOVE and self.path is not None and len(run.integrate_ms) % 2 == 0 \
-                and not self._path_still_safe(self.path):
+                and not path_safe(run.planner, self.path.remaining(), self.safe):
             run.replans += 1
             self.phase = Phase.PROPOSE
-
-    def _path_still_safe(self, path: StationPath) -> bool:
-        assert self.run is not None
-        rest = path.remaining()
-        safety = self.run.planner.safety
-        return all(segment_safe(safety, a, b, self.safe) for a, b in zip(rest[:-1], rest[1:], strict=True))
 
     def _approach(self, nav: NavState, here: np.ndarray) -> Command:
         assert self.run is not None
@@ -340,32 +309,7 @@ class ExploreAgent(Agent):
         if self.photo is not None:
             self.photo.finish(self.report)
             return
-        occupied: list[np.ndarray] = []
-        views: list[tuple[float, ...]] = []
-        volume: list[tuple[float, ...]] = []
-        boxes: list[list[float]] = []
-        objects: list[ExploredObject] = []
-        for k, run in enumerate(self.runs):
-            grid = run.planner.grid
-            ids = grid.occupied_ids
-            centres = grid.centres(np.stack(np.unravel_index(ids, grid.shape), axis=1))
-            occupied.append(np.column_stack([centres, np.full(len(centres), k)]))
-            views.extend((*v, k) for v in run.views)
-            volume.extend((*v, k) for v in run.volume)
-            boxes.append([*run.lo, *run.hi])
-            it = run.iterations_ms
-            run.estimate = run.coverage_estimate() if run.stop_reason != "no safe starting view" else 0.0
-            objects.append(ExploredObject(run.target.id, run.target.source, round(run.target.north, 2),
-                                          round(run.target.east, 2), {
-                "views": len(run.views),
-                "stop_reason": run.stop_reason or "element ended",
-                "object_region_done_s": None if run.focus_done_at is None else round(run.focus_done_at - self.t0, 1),
-                "coverage_estimate_percent": round(100.0 * run.estimate, 1),
-                "rejected_views": run.rejected, "replans": run.replans,
-                "iteration_time_ms": {"mean": round(float(np.mean(it)), 1) if it else None,
-                                      "max": round(float(np.max(it)), 1) if it else None},
-                "scan_integration_ms": round(float(np.mean(run.integrate_ms)), 1) if run.integrate_ms else None,
-                "object_voxels_mapped": int(len(run.object_voxels()))}))
+        objects, products = nbv_results(self.runs, self.t0)
         all_it = [t for r in self.runs for t in r.iterations_ms]
         self.report.objects, self.report.views = objects, sum(len(r.views) for r in self.runs)
         self.report.resolution_m = RESOLUTION_M
@@ -375,11 +319,7 @@ class ExploreAgent(Agent):
             "safe_distance_m": self.params.safe_distance, "planning_distance_m": self.safe,
             "scanner_tilt_deg": round(self.tilt, 2) if self.tilt is not None else None})
         self.context.knowledge.maps[self.context.element.id] = {
-            "explore_occupied": np.concatenate(occupied).astype(np.float32) if occupied else np.zeros((0, 4)),
-            "explore_views": np.asarray(views, dtype=np.float64).reshape(-1, 6),
-            "explore_volume": np.asarray(volume, dtype=np.float64).reshape(-1, 4),
-            "explore_track": np.asarray(self.track, dtype=np.float64).reshape(-1, 4),
-            "explore_boxes": np.asarray(boxes, dtype=np.float64).reshape(-1, 6),
+            **products, "explore_track": np.asarray(self.track, dtype=np.float64).reshape(-1, 4),
             "explore_resolution": np.array(RESOLUTION_M)}
 
 

@@ -9,13 +9,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mission.agents.explore_region import Target
+from mission.agents.explore_region import Target, exploration_box, prior_map, seabed_depth, survey_map_for
+from mission.agents.report import ExploredObject
 from mission.frames import rotation_zyx
+from mission.knowledge import Knowledge
 from mission.vehicle import ScanFrame
-from planners.nbv import NbvPlanner, Scan, View, Views
+from planners.nbv import NbvPlanner, Scan, Scanner, View, Views, Weights, segment_safe
+from planners.nbv.candidates import is_safe_view
 from planners.nbv.grid import FREE, UNKNOWN, StateGrid
 
 FOCUS_MARGIN_M = 1.5  # the object's region: its footprint's circle and its height grown by this much
+RESOLUTION_M = 0.25
+PRIOR_UNCERTAIN_M = 0.5  # the survey's soundings are 0.5 m cell means: the last 0.5 m above them stays unknown
+MIN_UNKNOWN = 4  # a view that would reveal fewer unknown voxels of the object's region is not worth the move
 
 
 @dataclass
@@ -114,3 +120,80 @@ class TargetRun:
             return 0.0
         open_edge = self.planner.derived.contour.reshape(-1)[ids]
         return float((1.0 - open_edge.mean()) * min(1.0, len(ids) / max(self.expected_voxels(), 1.0)))
+
+
+def start_view(planner: FixedMountNbv, target: Target, seabed: float, here: tuple[float, float], safe: float,
+               tilt_deg: float) -> View | None:
+    """A safe, known-free view facing the object, on the vehicle's side of it (`here`: north, east), as near the
+    ideal as found: `safe` plus 2–5 m from the object's circle, 1.5–4.5 m above the seabed's safe depth."""
+    bearing = math.atan2(here[1] - target.east, here[0] - target.north)
+    depth0 = seabed - safe - 1.5
+    for dr in (2.0, 3.0, 4.0, 5.0):
+        for dd in (0.0, -1.0, -2.0, -3.0):
+            for da in np.radians([0, 20, -20, 40, -40, 60, -60, 90, -90, 120, -120, 150, -150, 180]):
+                r = target.radius + safe + dr
+                p = np.array([target.north + r * math.cos(bearing + da), target.east + r * math.sin(bearing + da),
+                              depth0 + dd])
+                if planner.grid.state(p[None])[0] == FREE and is_safe_view(planner.safety, p[None], safe)[0]:
+                    heading = math.degrees(math.atan2(target.east - p[1], target.north - p[0])) % 360.0
+                    return View.at(p, heading, -tilt_deg)
+    return None
+
+
+def target_run(target: Target, knowledge: Knowledge, model: Scanner, weights: Weights, safe: float, ceiling: float,
+               seed: int, here: tuple[float, float], tilt_deg: float) -> TargetRun:
+    """The exploration of one object: its box (no shallower than `ceiling`), a planner over a voxel map seeded
+    from the survey's height map, and a start view; without one, the run's `stop_reason` says so."""
+    lo, hi = exploration_box(target, safe, model.max_range, ceiling=ceiling)
+    products = survey_map_for(knowledge, target)
+    vm = prior_map(products, lo, hi, RESOLUTION_M, uncertain=PRIOR_UNCERTAIN_M)
+    seabed = seabed_depth(products, target, target.radius + 1.0)
+    planner = FixedMountNbv(vm, lo, hi, model, weights=weights, safe_distance=safe, seed=seed)
+    planner.focus = object_region(planner.grid, target, seabed)
+    planner.min_unknown = MIN_UNKNOWN  # the object's region alone holds few unknown voxels a view can reach
+    start = start_view(planner, target, seabed, here, safe, tilt_deg)
+    if start is None:
+        return TargetRun(target, planner, lo, hi, seabed, View.at(target.centre), stop_reason="no safe starting view")
+    return TargetRun(target, planner, lo, hi, seabed, start)
+
+
+def path_safe(planner: NbvPlanner, points: np.ndarray, safe: float) -> bool:
+    """Whether every segment of a path (points, N×3) keeps `safe` metres from what the planner's map holds."""
+    return all(segment_safe(planner.safety, a, b, safe) for a, b in zip(points[:-1], points[1:], strict=True))
+
+
+def nbv_results(runs: list[TargetRun], t0: float) -> tuple[list[ExploredObject], dict[str, np.ndarray]]:
+    """Each explored object's figures, and the products of the run folder: the occupied voxels, views, known
+    volume over time and exploration boxes of all runs (a last column says which run)."""
+    occupied: list[np.ndarray] = []
+    views: list[tuple[float, ...]] = []
+    volume: list[tuple[float, ...]] = []
+    boxes: list[list[float]] = []
+    objects: list[ExploredObject] = []
+    for k, run in enumerate(runs):
+        grid = run.planner.grid
+        ids = grid.occupied_ids
+        centres = grid.centres(np.stack(np.unravel_index(ids, grid.shape), axis=1))
+        occupied.append(np.column_stack([centres, np.full(len(centres), k)]))
+        views.extend((*v, k) for v in run.views)
+        volume.extend((*v, k) for v in run.volume)
+        boxes.append([*run.lo, *run.hi])
+        it = run.iterations_ms
+        run.estimate = run.coverage_estimate() if run.stop_reason != "no safe starting view" else 0.0
+        objects.append(ExploredObject(run.target.id, run.target.source, round(run.target.north, 2),
+                                      round(run.target.east, 2), {
+            "views": len(run.views),
+            "stop_reason": run.stop_reason or "element ended",
+            "object_region_done_s": None if run.focus_done_at is None else round(run.focus_done_at - t0, 1),
+            "coverage_estimate_percent": round(100.0 * run.estimate, 1),
+            "rejected_views": run.rejected, "replans": run.replans,
+            "iteration_time_ms": {"mean": round(float(np.mean(it)), 1) if it else None,
+                                  "max": round(float(np.max(it)), 1) if it else None},
+            "scan_integration_ms": round(float(np.mean(run.integrate_ms)), 1) if run.integrate_ms else None,
+            "object_voxels_mapped": int(len(run.object_voxels()))}))
+    products = {
+        "explore_occupied": np.concatenate(occupied).astype(np.float32) if occupied else np.zeros((0, 4)),
+        "explore_views": np.asarray(views, dtype=np.float64).reshape(-1, 6),
+        "explore_volume": np.asarray(volume, dtype=np.float64).reshape(-1, 4),
+        "explore_boxes": np.asarray(boxes, dtype=np.float64).reshape(-1, 6)}
+    return objects, products
