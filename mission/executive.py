@@ -91,6 +91,12 @@ def default_timeout(element: RouteElement, nav: NavState, mission: Mission) -> f
     return float(budget) * 1.2 + MARGIN_S if budget is not None else mission.safety.max_duration
 
 
+def unsupported_elements(mission: Mission, agents: Mapping[str, object] | None = None) -> list[RouteElement]:
+    """The route elements whose kind has no agent (in `agents`, by default the registry)."""
+    kinds = REGISTRY if agents is None else agents
+    return [e for e in mission.route if e.kind not in kinds]
+
+
 class Executive:
     """Runs a mission on a vehicle. `emit(event, time, **fields)` receives every event as it happens."""
 
@@ -117,7 +123,7 @@ class Executive:
         self._stop_reason = reason
 
     def unsupported(self) -> list[RouteElement]:
-        return [e for e in self.mission.route if e.kind not in self.agents]
+        return unsupported_elements(self.mission, self.agents)
 
     def _violations(self, nav: NavState, element_id: str) -> list[Violation]:
         assert self.monitors is not None
