@@ -9,6 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from mission.knowledge import DetectedObject
+
 
 @dataclass
 class AgentReport:
@@ -113,26 +115,9 @@ class InspectReport(AgentReport):
 
 
 @dataclass
-class SurveyDetection:
-    """An object the survey detected (estimated frame), and the database object it was matched to."""
-
-    id: str
-    north: float
-    east: float
-    length: float
-    width: float
-    height: float
-    heading_deg: float
-    matched_id: str | None
-
-    def as_json(self) -> dict[str, Any]:
-        return {"id": self.id, "north": self.north, "east": self.east, "length": self.length, "width": self.width,
-                "height": self.height, "heading_deg": self.heading_deg, "matched_id": self.matched_id}
-
-
-@dataclass
 class SurveyReport(AgentReport):
-    """A `survey` element: its meander plan and, once it has ended, its coverage, pings and detections."""
+    """A `survey` element: its meander plan and, once it has ended, its coverage, pings and detections (each
+    with the database object it was matched to, if any)."""
 
     spacing_m: float
     heading_deg: float
@@ -141,15 +126,21 @@ class SurveyReport(AgentReport):
     cells: int
     coverage_percent: float | None = None
     pings: int | None = None
-    detections: list[SurveyDetection] | None = None
+    detections: list[DetectedObject] | None = None
 
     def as_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {"spacing_m": self.spacing_m, "heading_deg": self.heading_deg,
                                "planned_length_m": self.planned_length_m, "turns": self.turns, "cells": self.cells}
         if self.detections is not None:
             out.update({"coverage_percent": self.coverage_percent, "pings": self.pings,
-                        "detections": [d.as_json() for d in self.detections]})
+                        "detections": [_detection(d) for d in self.detections]})
         return out
+
+
+def _detection(d: DetectedObject) -> dict[str, Any]:
+    return {"id": d.id, "north": round(d.north, 2), "east": round(d.east, 2), "length": round(d.length, 2),
+            "width": round(d.width, 2), "height": round(d.height, 2), "heading_deg": round(d.heading_deg, 1),
+            "matched_id": d.database_id}
 
 
 @dataclass

@@ -16,7 +16,7 @@ import shapely
 from shapely.geometry import Polygon
 
 from mission.agents.base import Agent, AgentContext
-from mission.agents.report import SurveyDetection, SurveyReport
+from mission.agents.report import SurveyReport
 from mission.agents.waypoints import PathFollower
 from mission.knowledge import DetectedObject, Knowledge
 from mission.language.models import KnownObject, Survey
@@ -117,15 +117,14 @@ class SurveyAgent(Agent):
         knowledge: Knowledge = self.context.knowledge
         element = self.context.element.id
         database = self.context.mission.objects
-        detections: list[SurveyDetection] = []
+        detections: list[DetectedObject] = []
         for k, d in enumerate(products.pop("detections")):
             db_id = match_database(d, database)
             obj = DetectedObject(id=db_id or f"{element}-{k + 1}", north=d.north, east=d.east, length=d.length,
                                  width=d.width, height=d.height, heading_deg=d.heading_deg, depth=d.top_depth,
                                  database_id=db_id, element=element)
             knowledge.detections.append(obj)
-            detections.append(SurveyDetection(obj.id, round(d.north, 2), round(d.east, 2), round(d.length, 2),
-                                              round(d.width, 2), round(d.height, 2), round(d.heading_deg, 1), db_id))
+            detections.append(obj)
         knowledge.maps[element] = {**products, "lines": [line.tolist() for line in self.plan.lines]}
         self.report.coverage_percent = round(products["coverage_percent"], 2)
         self.report.pings, self.report.detections = self.pings, detections
