@@ -175,7 +175,7 @@ class ReferenceAgent(Agent):
         """One least-squares transform from the points of the agreeing fine views (seed 000, approach 3), placed
         in the world with the (dead-reckoned) estimate of each view; the camera pose of the last view in it.
         False while fewer than two views agree."""
-        fused = fuse_views(self.views, agreement=VIEW_AGREEMENT_M)
+        fused = fuse_views(self.views, VIEW_AGREEMENT_M)
         if fused is None:
             return False
         self.T_world_object_est = fused.T

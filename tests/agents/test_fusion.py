@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mission.agents.fusion import consistent_views, fuse_views
+from mission.agents.fusion import VIEW_AGREEMENT_M, consistent_views, fuse_views
 from mission.frames import pose_matrix
 from mission.geometry import rotation_angle_deg, transform_points
 
@@ -18,7 +18,7 @@ def views(noise: float, count: int, seed: int = 1):
 
 
 def test_fused_views_place_the_object_within_a_few_millimetres_of_the_truth():
-    fused = fuse_views(views(0.005, 4))
+    fused = fuse_views(views(0.005, 4), VIEW_AGREEMENT_M)
     assert fused is not None and fused.views == 4 and fused.points == 4 * len(MODEL)
     assert np.linalg.norm(fused.T[:3, 3] - T_TRUE[:3, 3]) < 0.01
     assert rotation_angle_deg(fused.T[:3, :3].T @ T_TRUE[:3, :3]) < 0.2
@@ -28,12 +28,12 @@ def test_fused_views_place_the_object_within_a_few_millimetres_of_the_truth():
 def test_a_wrong_identification_is_left_out_of_the_fusion():
     good = views(0.003, 3)
     wrong = (MODEL, transform_points(pose_matrix(150.4, 200.0, 58.0, 31.0), MODEL))
-    assert len(consistent_views([*good, wrong])) == 3
-    fused = fuse_views([good[0], wrong, good[1], good[2]])
+    assert len(consistent_views([*good, wrong], VIEW_AGREEMENT_M)) == 3
+    fused = fuse_views([good[0], wrong, good[1], good[2]], VIEW_AGREEMENT_M)
     assert fused is not None and fused.views == 3
     assert np.linalg.norm(fused.T[:3, 3] - T_TRUE[:3, 3]) < 0.01
 
 
 def test_no_fix_while_fewer_than_two_views_agree():
     wrong = (MODEL, transform_points(pose_matrix(151.0, 200.0, 58.0, 30.0), MODEL))
-    assert fuse_views([views(0.0, 1)[0], wrong]) is None
+    assert fuse_views([views(0.0, 1)[0], wrong], VIEW_AGREEMENT_M) is None

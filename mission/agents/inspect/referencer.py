@@ -142,7 +142,7 @@ class Referencer:
     def fuse(self, agreement: float) -> Fused | None:
         """T_world_object from the agreeing views (composed with the tracked placement once the object is
         placed), or None while fewer than two agree."""
-        fused = fuse_views(self.views, agreement=agreement) if len(self.views) >= 2 else None
+        fused = fuse_views(self.views, agreement) if len(self.views) >= 2 else None
         if fused is not None and self.place.fixed:  # the fusion corrects the tracked frame: compose it
             fused = fused._replace(T=self.place.T_wo @ fused.T)
         return fused

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from mission.agents.fusion import VIEW_AGREEMENT_M
+from mission.agents.fusion import SPREAD_VIEW_AGREEMENT_M
 from mission.agents.hover import WORK_SPEED_M_S
 from mission.agents.known_object import FINE_PRIOR_RADIUS_M, FINE_SHIFT_M, FINE_VIEWS, SEARCH_PRIOR_RADIUS_M
 
@@ -34,7 +34,7 @@ class InspectSettings:
     search_prior_radius_m: float = SEARCH_PRIOR_RADIUS_M
     fine_prior_radius_m: float = FINE_PRIOR_RADIUS_M
     tolerance_m: float = 0.05  # pairwise-distance consistency for identification
-    view_agreement_m: float = VIEW_AGREEMENT_M  # fine views agree this closely at the fine altitude
+    view_agreement_m: float = SPREAD_VIEW_AGREEMENT_M  # fine views agree this closely at the fine altitude
     fix_gate_m: float = 0.15  # once placed, a view that moves the set farther than this (plus 3× the assumed
     # odometry drift) from where odometry tracks it is a wrong identification, not a correction
     # the odometry chain
