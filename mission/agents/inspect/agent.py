@@ -186,7 +186,9 @@ class InspectAgent(Agent):
         if self.stop_kind is None:
             return Command.hold(nav)
         self.chain.poll(nav.time)
-        self.set_visit.poll(nav)
+        self.set_visit.poll(nav)  # a result may end the stop, or the inspection
         if self.stop_kind is StopKind.SET:
             return self.set_visit.step(nav, frame)
-        return self.target_visit.step(nav, frame)
+        if self.stop_kind is StopKind.TARGET:
+            return self.target_visit.step(nav, frame)
+        return Command.hold(nav)
