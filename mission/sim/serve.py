@@ -167,3 +167,42 @@ def serve(mission: Mission, address: str | Sequence[str], seed: int | None = Non
     summary.sim_time = vehicle.truth.time
     summary.wall_time = time.monotonic() - wall0
     return summary
+
+
+class ServedVehicle:
+    """`serve` in a background thread, for tests and notebooks: `with ServedVehicle(mission, address, speedup=20)
+    as served: …` starts it, leaving the block stops it (and re-raises what the server raised). `events` grows as
+    the autopilot logs (mode changes, arming, EKF source sets, GCS failsafe)."""
+
+    def __init__(self, mission: Mission, address: str | Sequence[str], **kwargs: Any):
+        self.stop_event = threading.Event()
+        self.events: list[dict[str, Any]] = []
+        self.summary: ServeSummary | None = None
+        self.error: BaseException | None = None
+        self._args = (mission, address)
+        self._kwargs = kwargs
+        self._thread = threading.Thread(target=self._run, name="auv-sim-serve", daemon=True)
+
+    def _run(self) -> None:
+        try:
+            self.summary = serve(*self._args, stop_event=self.stop_event, on_event=self.events.append,
+                                 **self._kwargs)
+        except BaseException as exc:  # handed to the thread that stops the server
+            self.error = exc
+
+    def start(self) -> ServedVehicle:
+        self._thread.start()
+        return self
+
+    def stop(self, timeout: float = 5.0) -> ServeSummary | None:
+        self.stop_event.set()
+        self._thread.join(timeout)
+        if self.error is not None:
+            raise self.error
+        return self.summary
+
+    def __enter__(self) -> ServedVehicle:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()

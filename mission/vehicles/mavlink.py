@@ -79,6 +79,7 @@ class MavlinkVehicle:
         usbl = mission.sensors.usbl
         self.sigma_fallback = usbl.sigma if usbl is not None else 1.0
         self.nav: NavState | None = None
+        self._clock: float | None = None  # vehicle time the last `advance` reached
         self.in_control = True
         self._mode_seen = (sub.GUIDED, True)
         self._pending: list[_Pending] = []
@@ -196,7 +197,8 @@ class MavlinkVehicle:
     def advance(self) -> None:
         """Wait until a LOCAL_POSITION_NED one control period newer than the last observed one arrives (at most
         ADVANCE_WALL_LIMIT of wall time); LinkLostError when the heartbeat has been silent too long."""
-        start = self.nav.time if self.nav is not None else -math.inf
+        latest = self.link.latest("LOCAL_POSITION_NED")
+        start = self._clock if self._clock is not None else latest.time_boot_ms / 1000.0 if latest else -math.inf
         due_ms = (start + self.control_period) * 1000.0 - 1.0  # 1 ms: time_boot_ms is rounded
         deadline = time.monotonic() + ADVANCE_WALL_LIMIT
 
@@ -208,6 +210,9 @@ class MavlinkVehicle:
             if self.link.wait_for(moved, min(0.1, max(deadline - time.monotonic(), 0.0))):
                 break
         self._check_link()
+        latest = self.link.latest("LOCAL_POSITION_NED")
+        if latest is not None and latest.time_boot_ms >= due_ms:
+            self._clock = start + self.control_period  # ticks stay on the period's grid
 
     def close(self) -> None:
         self.link.close()

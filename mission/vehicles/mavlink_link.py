@@ -35,7 +35,7 @@ def connect(address: str, source_system: int, source_component: int) -> Any:
     mu = mavutil()
     try:
         return mu.mavlink_connection(address, source_system=source_system, source_component=source_component,
-                                     autoreconnect=False, force_connected=False)
+                                     autoreconnect=False, force_connected=False, retries=0)
     except Exception as exc:  # pymavlink raises OSError, ValueError, serial errors, … for bad addresses
         raise VehicleError(f"cannot open MAVLink address '{address}': {exc}") from exc
 
