@@ -9,8 +9,7 @@ GUIDED; heartbeat with MAV_TYPE_SUBMARINE, custom_mode = the mode number, the ar
 was seen once → the FS_GCS_ENABLE action, default 2 = disarm), `libraries/GCS_MAVLink` (COMMAND_ACK for
 COMMAND_LONG and for SET_MODE, MAV_CMD_SET_MESSAGE_INTERVAL). ArduSub boots disarmed in MANUAL.
 
-Outside GUIDED (a pilot's mode), or disarmed, the simulated vehicle holds: it stops and keeps its depth
-(SURFACE: it rises to the surface). GCS heartbeats are timed on the wall clock, as a GCS sends them.
+Outside GUIDED (a pilot's mode), or disarmed, the simulated vehicle holds (`SimAutopilot._hold`). GCS heartbeats are timed on the wall clock, as a GCS sends them.
 """
 
 from __future__ import annotations
@@ -66,9 +65,17 @@ class SimAutopilot:
 
     # -- state changes -------------------------------------------------------------------------------------
     def _hold(self) -> None:
+        """What the vehicle does without GUIDED setpoints: POSHOLD keeps the estimated position where it was
+        entered; SURFACE rises; any other mode, or disarmed, stops the thrusters' forward work and keeps depth
+        (the current then carries the vehicle, as it would a pilot's idle ROV)."""
         v = self.vehicle
-        depth = 0.0 if self.mode == sub.SURFACE and self.armed else v.depth_meas
-        v.apply(Command(heading=v.heading_meas, speed=0.0, depth=depth))
+        if self.armed and self.mode == sub.POSHOLD:
+            command = Command(heading=v.heading_meas, speed=0.0, depth=v.depth_meas,
+                              station=(v.filter.north, v.filter.east))
+        else:
+            depth = 0.0 if self.mode == sub.SURFACE and self.armed else v.depth_meas
+            command = Command(heading=v.heading_meas, speed=0.0, depth=depth)
+        v.apply(command)
         self.velocity_setpoint_at = None
 
     def set_mode(self, mode: int, reason: str) -> bool:
@@ -86,7 +93,7 @@ class SimAutopilot:
         if armed != self.armed:
             self.log("armed" if armed else "disarmed", reason=reason)
         self.armed = armed
-        if not armed:
+        if not armed or self.mode != sub.GUIDED:
             self._hold()
         self.heartbeat()
 
