@@ -9,7 +9,8 @@ GUIDED; heartbeat with MAV_TYPE_SUBMARINE, custom_mode = the mode number, the ar
 was seen once → the FS_GCS_ENABLE action, default 2 = disarm), `libraries/GCS_MAVLink` (COMMAND_ACK for
 COMMAND_LONG and for SET_MODE, MAV_CMD_SET_MESSAGE_INTERVAL). ArduSub boots disarmed in MANUAL.
 
-Outside GUIDED (a pilot's mode), or disarmed, the simulated vehicle holds (`SimAutopilot._hold`). GCS heartbeats are timed on the wall clock, as a GCS sends them.
+Outside GUIDED (a pilot's mode), or disarmed, the simulated vehicle holds (`SimAutopilot._hold`). GCS heartbeats
+are timed on the wall clock, as a GCS sends them.
 """
 
 from __future__ import annotations
