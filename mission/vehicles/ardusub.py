@@ -46,7 +46,9 @@ SOURCE_SET_DEAD_RECKONING = 2  # EK3_SRC2_POSXY none, EK3_SRC2_VELXY the DVL: de
 
 
 def mode_name(custom_mode: int) -> str:
-    """>>> mode_name(4), mode_name(99)
+    """ArduSub's name of a custom_mode number.
+
+    >>> mode_name(4), mode_name(99)
     ('GUIDED', 'MODE_99')
     """
     return MODES.get(custom_mode, f"MODE_{custom_mode}")
@@ -76,7 +78,9 @@ def heading_to_yaw(heading_deg: float) -> float:
 
 
 def yaw_to_heading(yaw_rad: float) -> float:
-    """>>> yaw_to_heading(-math.pi / 2)
+    """MAVLink yaw (radians) → heading (degrees clockwise from north, 0..360).
+
+    >>> yaw_to_heading(-math.pi / 2)
     270.0
     """
     return math.degrees(yaw_rad) % 360.0
