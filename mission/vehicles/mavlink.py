@@ -198,7 +198,8 @@ class MavlinkVehicle:
         """Wait until a LOCAL_POSITION_NED one control period newer than the last observed one arrives (at most
         ADVANCE_WALL_LIMIT of wall time); LinkLostError when the heartbeat has been silent too long."""
         latest = self.link.latest("LOCAL_POSITION_NED")
-        start = self._clock if self._clock is not None else latest.time_boot_ms / 1000.0 if latest else -math.inf
+        now = latest.time_boot_ms / 1000.0 if latest is not None else -math.inf
+        start = self._clock if self._clock is not None and self._clock <= now + 1.0 else now  # reboot: restart
         due_ms = (start + self.control_period) * 1000.0 - 1.0  # 1 ms: time_boot_ms is rounded
         deadline = time.monotonic() + ADVANCE_WALL_LIMIT
 

@@ -113,6 +113,24 @@ def test_the_gcs_failsafe_disarms_the_vehicle_when_the_gcs_heartbeat_stops(missi
     assert not beat.base_mode & 128 and beat.system_status == 5  # disarmed, MAV_STATE_CRITICAL
 
 
+def test_a_set_mode_message_is_acknowledged_and_changes_the_mode(mission: Mission) -> None:
+    port = free_udp_port()
+    with ServedVehicle(mission, f"udpout:127.0.0.1:{port}", speedup=10) as served:
+        gcs = Gcs(port)
+        try:
+            assert gcs.conn.wait_heartbeat(timeout=5) is not None
+            gcs.conn.mav.set_mode_send(1, 1, 9)  # SURFACE
+            ack = gcs.conn.recv_match(type="COMMAND_ACK", blocking=True, timeout=3)
+            gcs.conn.mav.set_mode_send(1, 1, 77)  # no such ArduSub mode
+            nak = gcs.conn.recv_match(type="COMMAND_ACK", blocking=True, timeout=3)
+            beat = gcs.newest("HEARTBEAT", 1.2)
+        finally:
+            gcs.close()
+    assert (ack.command, ack.result, nak.result) == (11, 0, 2)  # SET_MODE: accepted, then denied
+    assert beat.custom_mode == 9
+    assert [e["mode"] for e in served.events if e["event"] == "mode_changed"] == ["SURFACE"]
+
+
 def test_setpoints_outside_guided_are_ignored_and_the_vehicle_holds(mission: Mission, tmp_path: Path) -> None:
     port = free_udp_port()
     with ServedVehicle(mission, f"udpout:127.0.0.1:{port}", speedup=20, out=tmp_path):

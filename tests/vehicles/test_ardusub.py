@@ -53,7 +53,7 @@ def test_the_vehicle_side_reads_back_the_command_it_was_sent(command: Command) -
     assert back.station == command.station
 
 
-def test_masks_arduSub_ignores_give_no_command() -> None:
+def test_masks_that_ardusub_ignores_give_no_command() -> None:
     assert sub.command_from_setpoint(sub.Setpoint(sub.POSITION | sub.VELOCITY | sub.ACCELERATION), 0.0) is None
     assert sub.command_from_setpoint(sub.Setpoint(sub.POSITION | sub.YAW_RATE), 0.0) is None  # acceleration used
 
