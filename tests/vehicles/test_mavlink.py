@@ -133,6 +133,9 @@ def test_a_heading_speed_depth_command_moves_the_simulated_vehicle_as_the_truth_
     assert float(last["east"]) > 20.0  # 40 s at up to 1 m/s, after turning from north
     assert end.time - start.time == pytest.approx(40.0, abs=0.25)
     assert abs(float(last["east"]) - end.east) < 3.0  # the estimate the adapter saw tracks the truth
+    assert end.position_sigma == pytest.approx(float(last["position_sigma"]), abs=0.05)  # LOCAL_POSITION_NED_COV
+    used_wh = mission.vehicle.energy_wh - end.energy_wh  # BATTERY_STATUS.energy_consumed, sent once a second
+    assert 0.0 < used_wh and used_wh == pytest.approx(float(last["energy_wh"]), abs=0.15)
 
 
 def test_a_station_command_holds_the_point(mission: Mission, tmp_path: Path) -> None:
@@ -259,6 +262,7 @@ class BareVehicle:
         self.conn = mavutil().mavlink_connection(address, source_system=1, source_component=1)
         self.results = results
         self.mode = 19  # MANUAL
+        self.armed = False
         self.stop = threading.Event()
         self.thread = threading.Thread(target=self._run, daemon=True)
         self.thread.start()
@@ -266,7 +270,7 @@ class BareVehicle:
     def _run(self) -> None:
         t = 0
         while not self.stop.is_set():
-            self.conn.mav.heartbeat_send(12, 3, 1, self.mode, 3)
+            self.conn.mav.heartbeat_send(12, 3, 1 | (128 if self.armed else 0), self.mode, 3)
             self.conn.mav.local_position_ned_send(t, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
             t += 100
             end = time.monotonic() + 0.1
@@ -276,6 +280,8 @@ class BareVehicle:
                     result = self.results.get(msg.command, 0)
                     if msg.command == 176 and result == 0:
                         self.mode = int(msg.param2)
+                    if msg.command == 400 and result == 0:
+                        self.armed = msg.param1 == 1.0
                     self.conn.mav.command_ack_send(msg.command, result)
 
     def close(self) -> None:
@@ -309,15 +315,38 @@ def test_a_refused_arming_is_a_vehicle_error_naming_it(mission: Mission) -> None
         bare.close()
 
 
-def test_switching_aiding_off_selects_the_dead_reckoning_source_set(mission: Mission) -> None:
+def test_aiding_off_selects_the_dead_reckoning_source_set_and_payloads_are_only_logged(mission: Mission) -> None:
     port = free_udp_port()
     events = Events()
     with ServedVehicle(mission, f"udpout:127.0.0.1:{port}", speedup=10) as served:
         vehicle = open_vehicle(f"udpin:127.0.0.1:{port}", mission, VehicleOptions(connect_timeout=5, emit=events))
         try:
             vehicle.set_aiding(False)
+            vehicle.set_payload(frozenset({"mbes"}))
+            vehicle.set_frame_rate(2.0)
             drive(vehicle, Command(heading=0.0, speed=0.5, depth=2.0), 2.0)
         finally:
             vehicle.close()
     assert [e["source_set"] for e in served.events if e["event"] == "ekf_source_set"] == [2]
     assert events.named("vehicle_command_refused") == []
+    assert len(events.named("payload_not_streamed")) == 1  # logged once; nothing is sent for payloads
+
+
+def test_a_refused_ekf_source_set_is_logged_and_the_mission_goes_on(mission: Mission) -> None:
+    port = free_udp_port()
+    events = Events()
+    bare = BareVehicle(f"udpout:127.0.0.1:{port}", {42007: 2})  # MAV_RESULT_DENIED
+    try:
+        vehicle = open_vehicle(f"udpin:127.0.0.1:{port}", mission, VehicleOptions(connect_timeout=2, emit=events))
+        try:
+            vehicle.set_aiding(True)
+            deadline = time.monotonic() + 2.0
+            while time.monotonic() < deadline and not events.named("vehicle_command_refused"):
+                vehicle.advance()
+                obs = vehicle.observe()
+        finally:
+            vehicle.close()
+    finally:
+        bare.close()
+    assert events.named("vehicle_command_refused") == [{"command": "SET_EKF_SOURCE_SET 1", "result": 2}]
+    assert obs.in_control
