@@ -60,7 +60,7 @@ def _errors(gt: np.ndarray, est: np.ndarray) -> dict[str, Any]:
 
 
 def _relative(poses: np.ndarray) -> np.ndarray:
-    from perception_plugins.vo.se3 import invert
+    from mission.geometry import invert
 
     return np.stack([invert(poses[0]) @ P for P in poses])
 
@@ -256,7 +256,8 @@ def _after_blackout(gt: np.ndarray, P: np.ndarray, after: slice) -> dict[str, fl
     """Over frames `after` (the rest of the run after the black-out): the error of the distance travelled, and the
     relative pose's translation error per metre travelled and the attitude error it ends with (the odometer's own
     drift after recovering, which the summed distance cannot show)."""
-    from perception_plugins.vo.se3 import invert, to_rotvec
+    from mission.geometry import invert
+    from perception_plugins.vo.se3 import to_rotvec
 
     steps_gt = np.linalg.norm(np.diff(gt[after, :3, 3], axis=0), axis=1).sum()
     steps_est = np.linalg.norm(np.diff(P[after, :3, 3], axis=0), axis=1).sum()

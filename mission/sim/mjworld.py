@@ -51,7 +51,7 @@ import scipy.fft
 from numpy.typing import NDArray
 
 from mission.frames import Array, rotation_zyx
-from mission.world.model import Box, Cylinder, Part, Texture
+from mission.language.world import Box, Cylinder, Part, Texture
 from mission.world.scene import PlacedObject, Scene
 from mission.world.terrain import HeightField
 

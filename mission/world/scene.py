@@ -12,7 +12,7 @@ import shapely
 from shapely.geometry import MultiPoint, Polygon
 
 from mission.frames import Array, pose_matrix, transform_points
-from mission.world.model import Box, Cylinder, Part, Texture, World, WorldObject
+from mission.language.world import Box, Cylinder, Part, Texture, World, WorldObject
 from mission.world.terrain import HeightField, generate_seabed
 
 

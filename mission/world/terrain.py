@@ -13,7 +13,7 @@ import numpy as np
 from scipy.ndimage import gaussian_filter
 
 from mission.frames import Array
-from mission.world.model import Seabed
+from mission.language.world import Seabed
 
 
 @dataclass(frozen=True)

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from mission.language.loader import load_world
+from mission.language.world import World
 from mission.sim.mbes import Multibeam
 from mission.sim.mjworld import R_MJ_NED, MjWorld, mj_dir_to_ned, mj_to_ned, mjworld_for, ned_dir_to_mj, ned_to_mj
-from mission.world.model import World
 from mission.world.scene import Scene, build_scene
 
 REFERENCE_WORLD = Path(__file__).resolve().parents[2] / "worlds" / "sps_field.yaml"

@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
+from mission.language.world import World
 from mission.sim.mjworld import MjWorld
 from mission.sim.scanner import Scanner3D
-from mission.world.model import World
 from mission.world.scene import build_scene
 from planners.nbv import Box, Scanner, View
 from planners.nbv import Scene as ViewScene
