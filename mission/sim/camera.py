@@ -147,7 +147,7 @@ def _gl_context(width: int, height: int) -> Any:
             if backend == "egl":
                 from mujoco.egl import GLContext
             else:
-                from mujoco.osmesa import GLContext  # type: ignore[no-redef]
+                from mujoco.osmesa import GLContext  # type: ignore[no-redef,unused-ignore]
             context = GLContext(width, height)
             context.make_current()
             return context

@@ -27,11 +27,11 @@ class HeightField:
 
     @property
     def north_max(self) -> float:
-        return self.north0 + (self.depth.shape[0] - 1) * self.resolution
+        return float(self.north0 + (self.depth.shape[0] - 1) * self.resolution)
 
     @property
     def east_max(self) -> float:
-        return self.east0 + (self.depth.shape[1] - 1) * self.resolution
+        return float(self.east0 + (self.depth.shape[1] - 1) * self.resolution)
 
     def depth_at(self, north: float, east: float) -> float:
         """Bilinear depth at one point; outside the grid the nearest edge value is used."""

@@ -44,7 +44,7 @@ class MultiviewReferencingPlugin:
         if approach not in APPROACHES:
             raise MultiviewError(f"unknown approach {approach!r} (available: {', '.join(APPROACHES)})")
         self.settings = RecognitionSettings(views=int(own.get("views", self.settings.views)),
-                                            approach=approach)  # type: ignore[arg-type]
+                                            approach=approach)  # type: ignore[arg-type,unused-ignore]
 
     def reset(self) -> None:
         return None

@@ -159,7 +159,7 @@ def meander(
     # slid line grid, cut single-direction rows) may leave no more uncovered than the tolerance or, if that leaves
     # more, than the single-direction plan does
     def allowed() -> float:
-        return max(fill_tolerance * scene.free.area, uncovered_area(scene, base_runs)) + 1e-6
+        return float(max(fill_tolerance * scene.free.area, uncovered_area(scene, base_runs)) + 1e-6)
 
     plan = _shortest(scene, options, base, allowed)
     for neighbours, sliver in ((True, SLIVER), (False, SLIVER), (True, FINE_SLIVER), (False, FINE_SLIVER)):

@@ -101,7 +101,7 @@ class Router:
         n, m = len(pp), len(qq)
         direct = np.linalg.norm(pp[:, None, :] - qq[None, :, :], axis=2)
         if self.empty:
-            return direct
+            return np.asarray(direct, dtype=float)
         clear = self.clear(np.repeat(pp, m, axis=0), np.tile(qq, (n, 1))).reshape(n, m)
         if clear.all() or len(self.nodes) == 0:
             return np.where(clear, direct, np.inf)
@@ -120,16 +120,16 @@ class Router:
         qq = np.atleast_2d(np.asarray(q, dtype=float))
         out = np.linalg.norm(pp - qq, axis=1)
         if self.empty:
-            return out
+            return np.asarray(out, dtype=float)
         blocked = np.flatnonzero(~self.clear(pp, qq))
         if blocked.size == 0:
-            return out
+            return np.asarray(out, dtype=float)
         if len(self.nodes) == 0:
             out[blocked] = np.inf
-            return out
+            return np.asarray(out, dtype=float)
         via = (self._reach(pp[blocked])[:, :, None] + self.dist[None, :, :]).min(axis=1)
         out[blocked] = (via + self._reach(qq[blocked])).min(axis=1)
-        return out
+        return np.asarray(out, dtype=float)
 
     def route(self, p: ArrayLike, q: ArrayLike) -> Array:
         """The shortest zone-avoiding polyline from p to q; the straight segment if none exists."""
