@@ -49,7 +49,8 @@ from mission.errors import AuvError
 from mission.frames import R_BODY_CAM, Array, camera_pose
 from mission.language.models import Stereo
 from mission.language.world import Texture, World
-from mission.sim.mjworld import HIDDEN_GROUP, R_MJ_NED, SEABED_TILE_GROUP, VISUAL_GROUP, Appearance, MjWorld, ned_to_mj
+from mission.sim.mjworld import HIDDEN_GROUP, R_MJ_NED, SEABED_TILE_GROUP, VISUAL_GROUP, MjWorld, ned_to_mj
+from mission.sim.textures import Appearance
 from mission.world.scene import Scene, build_scene
 
 

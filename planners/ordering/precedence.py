@@ -264,16 +264,12 @@ class PrecedencePath:
         if move[0] == 2:
             _, i, j = move
             touched = [o[i - 1], o[i], o[j], o[j + 1]]
-            seg = o[i:j + 1]
-            seg.reverse()
-            o[i:j + 1] = seg
+            o[i:j + 1] = o[i:j + 1][::-1]
             self.reindex(i, j)
             return touched
         _, i, j, pu, rev = move
-        seg = o[i:j + 1]
+        seg = o[i:j + 1][::-1] if rev else o[i:j + 1]
         touched = [o[i - 1], o[i], o[j], o[j + 1], o[pu], o[pu + 1]]
-        if rev:
-            seg.reverse()
         if pu > j:
             o[i:pu + 1] = o[j + 1:pu + 1] + seg
             self.reindex(i, pu)
