@@ -1,7 +1,7 @@
 """The world as a MuJoCo model: one static model per scene that the sonar ray-casts and the cameras render.
 
 Seed 002 §2.1 surveys the seabed with a multibeam echo-sounder whose beams are "ray-cast against the world"; the
-stereo cameras of a later issue render the same world. Both go through this module: the seabed height field
+stereo cameras render the same world. Both go through this module: the seabed height field
 becomes an `hfield` geom and every object part a box or cylinder geom, all static in the worldbody.
 
 Frames. Our world is local NED (north, east, down = depth). MuJoCo is right-handed and z-up, so the model is
