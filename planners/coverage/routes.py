@@ -3,6 +3,10 @@
 A visibility graph over the corners of the zones grown by the standoff gives the shortest polyline between two
 points that keeps out of the zones; all-pairs distances between the corners are computed once per request
 (Floyd–Warshall), so a batch of transit lengths costs a few array operations.
+
+The graph is kept as numpy arrays, not a networkx graph: measured (`benchmarks/networkx_timing.py`) over the
+coverage benchmark's 47 seeded scenes with zones (4–28 corners), `networkx.all_pairs_dijkstra` into the same
+distance and next-hop arrays took 4.5–4.8× as long as the vectorised Floyd–Warshall (median of two runs; 1.8–10×).
 """
 
 from __future__ import annotations
