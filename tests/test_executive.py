@@ -185,7 +185,7 @@ def test_the_executive_runs_on_the_stub_with_mujoco_and_matplotlib_unimportable(
         report = Executive(mission, StubVehicle.for_mission(mission), EventLog().emit).run()
         loaded = sorted(m for m in sys.modules if m.split(".")[0] in ("mujoco", "matplotlib")
                         or m.startswith("mission.sim"))
-        print(report.completed, [e.status for e in report.elements], loaded)
+        print(report.completed, [str(e.status.value) for e in report.elements], loaded)
     """)
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
