@@ -31,7 +31,7 @@ from typing import Any
 from mission.agents.base import Agent, AgentContext
 from mission.errors import LinkLostError
 from mission.frames import wrap_deg
-from mission.language.models import Vehicle as VehicleSettings
+from mission.language.models import VehicleSettings
 from mission.plugin_api import ReferencingResult, StereoImages
 from mission.vehicle import HOVER_GAIN, HOVER_SPEED, Command, NavState, Observation
 

@@ -7,7 +7,7 @@ import time
 import pytest
 
 from mission.errors import LinkLostError
-from mission.language.models import Vehicle as VehicleSettings
+from mission.language.models import VehicleSettings
 from mission.plugin_api import PerceptionPlugin, ReferencingResult
 from mission.testing import FakeAgent, FakeStep, ScriptedPlugin, StubFaults, StubVehicle, blank_frame, take_from
 from mission.vehicle import HOVER_SPEED, Command
