@@ -17,11 +17,11 @@ from conftest import WORLD  # noqa: E402
 from mission import load_mission, simulate  # noqa: E402
 from mission.agents.explore import FixedMountNbv, mount_tilt_deg, scan_of  # noqa: E402
 from mission.agents.explore_region import Target, exploration_box, fill_holes, prior_map  # noqa: E402
-from mission.language.world import World  # noqa: E402
 from mission.sim.explore_metrics import distance_to_object, surface_keys  # noqa: E402
 from mission.sim.mjworld import MjWorld  # noqa: E402
 from mission.sim.scanner import Scanner3D  # noqa: E402
 from mission.vehicle import ScanFrame  # noqa: E402
+from mission.world.model import World  # noqa: E402
 from mission.world.scene import build_scene  # noqa: E402
 from planners.nbv import Box, Cylinder, Scanner, View, Weights  # noqa: E402
 from planners.nbv import Scene as ViewScene  # noqa: E402
