@@ -30,7 +30,6 @@ import time
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from mission.errors import PluginError
 from mission.plugin_api import StereoImages
 from mission.plugin_calls import PluginCall, RoleWorker, Timing, no_answer
 

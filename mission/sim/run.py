@@ -79,7 +79,7 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
 
     wall0 = time.perf_counter()
     try:
-        host = PluginHost(mission.plugins.model_dump(), plugin_settings(mission), emit, clock=time.thread_time) \
+        host = PluginHost(mission.plugins.model_dump(), plugin_settings(mission), emit, simulated_clock=True) \
             if any(mission.plugins.model_dump().values()) else None
         from mission.artifacts import Artifacts
 
