@@ -147,7 +147,9 @@ class RoleWorker:
             self.worker.send(item.message)
 
     def close(self, deadline: float) -> None:
-        """Ask the worker to close its plug-in and exit; kill it at `deadline` (monotonic); reap every worker."""
+        """Ask the worker to close its plug-in and exit; kill it at `deadline` (monotonic); reap every worker.
+        The role is then out of service: nothing restarts it."""
+        self.broken = "the plug-in host was closed"
         if not self.worker.ended:
             self.worker.send(("close",))
             while not self.worker.ended and time.monotonic() < deadline:
@@ -167,6 +169,7 @@ class RoleWorker:
 
     # -- calls -------------------------------------------------------------------------------------------------
     def submit(self, call: PluginCall, frame: Any, request: Any) -> None:
+        self.pump()  # a worker that died while idle is replaced before it is given the call
         if self.broken is not None:
             call.resolve(no_answer(self.role, f"plug-in unavailable: {self.broken}"), call.submitted_at)
             return
@@ -271,7 +274,8 @@ class RoleWorker:
         if item.call is not None:
             self._fail(item.call, why, elapsed_ms, ready if t.simulated else -math.inf, worker_restarted=True)
         else:
-            self._fault(None, f"reset: {why}", elapsed_ms, ready if t.simulated else None, worker_restarted=True)
+            due = ready if t.simulated and math.isfinite(ready) else None
+            self._fault(None, f"reset: {why}", elapsed_ms, due, worker_restarted=True)
 
     def _break(self, why: str) -> None:
         self.broken = why

@@ -133,6 +133,8 @@ class PluginHost:
         return min(0.5, max(0.0, worker.next_deadline() - time.monotonic()) + 0.01)
 
     def _pump_all(self) -> None:
+        if self.closed:
+            return
         for worker in self.workers.values():
             worker.pump()
         self._flush(self.now)

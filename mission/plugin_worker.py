@@ -20,6 +20,7 @@ this class never restarts itself.
 from __future__ import annotations
 
 import multiprocessing
+import pickle
 import queue
 import signal
 import sys
@@ -89,7 +90,7 @@ def outbox_send(outbox: Connection, message: Message) -> None:
     """Send an answer; a result that cannot be pickled is reported as the call's error instead."""
     try:
         outbox.send(message)
-    except (TypeError, AttributeError, ValueError) as exc:  # what pickling raises on an unpicklable result
+    except (pickle.PicklingError, TypeError, AttributeError, ValueError) as exc:  # an unpicklable result
         outbox.send(("raised", message[1], f"its result could not be sent back: {exc!r}", *message[3:]))
 
 
@@ -122,7 +123,7 @@ class WorkerProcess:
         self._outbox, outbox_write = ctx.Pipe(duplex=False)
         self.process: BaseProcess = ctx.Process(target=serve, args=(spec, inbox_read, outbox_write),
                                                 name=f"auv-plugin:{spec}", daemon=True)
-        self.started_wall = time.perf_counter()
+        self.started_wall = time.monotonic()
         self.process.start()
         inbox_read.close()  # only the worker holds these ends: its death is EOF here and EPIPE for the feeder
         outbox_write.close()
@@ -182,9 +183,9 @@ class WorkerProcess:
         self.ended = True
 
     def stop(self, deadline: float) -> None:
-        """Wait until the wall-clock `deadline` (perf_counter) for the worker to exit, then kill it; reap it."""
+        """Wait until the wall-clock `deadline` (`time.monotonic`) for the worker to exit, then kill it; reap it."""
         self._feed.put(None)
-        self.process.join(max(0.0, deadline - time.perf_counter()))
+        self.process.join(max(0.0, deadline - time.monotonic()))
         if self.process.is_alive():
             self.process.kill()
             self.process.join(5.0)

@@ -3,8 +3,9 @@
 Name them by import path, e.g. `PluginHost({"referencing": "mission.testing_plugins:SleepingPlugin"}, …)`. Each
 answers an ordinary frame (any request but `FAULT`) with a `ReferencingResult` that echoes the frame (its time
 and the mean of its left image) and counts the calls since `configure`; given the request `FAULT`, it does its
-one fault: sleep 30 s, segfault, exit, or raise. `SlowPlugin` answers every frame correctly after burning
-`settings["cpu_s"]` seconds of CPU time (default 0.2); `BrokenPlugin` fails to configure.
+one fault: sleep 30 s, segfault, exit, raise, or return what cannot be sent back. `SlowPlugin` answers every
+frame correctly after burning `settings["cpu_s"]` seconds of CPU time (default 0.2); `BrokenPlugin` fails to
+configure; `StartsOncePlugin` configures once per marker file and segfaults on `FAULT` (its worker cannot restart).
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import ctypes
 import os
 import time
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 from mission.plugin_api import ReferencingResult, StereoImages
@@ -88,3 +90,24 @@ class BrokenPlugin(EchoPlugin):
 
     def configure(self, settings: Mapping[str, Any]) -> None:
         raise ValueError("this plug-in never starts")
+
+
+class UnpicklableResultPlugin(EchoPlugin):
+    """Answers a `FAULT` request with a result that holds a lambda (which no pipe can carry)."""
+
+    def process(self, frame: StereoImages, request: Any) -> ReferencingResult:
+        result = super().process(frame, None)
+        if request == FAULT:
+            result.details["callback"] = lambda: None
+        return result
+
+
+class StartsOncePlugin(SegfaultingPlugin):
+    """Creates `settings["marker"]` in `configure`, and refuses to configure when it exists."""
+
+    def configure(self, settings: Mapping[str, Any]) -> None:
+        marker = Path(settings["marker"])
+        if marker.exists():
+            raise RuntimeError(f"{marker} exists: configured once already")
+        marker.touch()
+        super().configure(settings)

@@ -4,7 +4,6 @@ done-when line)."""
 
 from __future__ import annotations
 
-import multiprocessing
 import os
 import tempfile
 import time
@@ -16,6 +15,7 @@ os.environ.setdefault("MESA_SHADER_CACHE_DIR", tempfile.mkdtemp(prefix="mesa-cac
 
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
+from test_plugin_worker import plugin_workers  # noqa: E402
 
 from mission import load_mission  # noqa: E402
 from mission.agents import Agent, AgentContext  # noqa: E402
@@ -209,4 +209,4 @@ def test_control_ticks_go_on_at_their_rate_while_a_plugin_hangs_or_crashes(trans
     answered = [agent.results[c.frame_time] for c in agent.calls if c.frame_time in agent.results]
     assert sum(r.recognised for r in answered) >= 10  # before and after the fault
     assert wall < 15.0  # nowhere near the sleeper's 30 s
-    assert multiprocessing.active_children() == []
+    assert plugin_workers() == []

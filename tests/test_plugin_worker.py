@@ -24,6 +24,11 @@ from mission.testing_plugins import FAULT, EchoPlugin
 TESTING = "mission.testing_plugins:"
 
 
+def plugin_workers() -> list[multiprocessing.process.BaseProcess]:
+    """This process's live plug-in workers (other tests' process pools are not ours to count)."""
+    return [p for p in multiprocessing.active_children() if p.name.startswith("auv-plugin:")]
+
+
 def frame(t: float, shape: tuple[int, int] = (120, 160)) -> StereoImages:
     left = np.full(shape, round(10 * t) % 250, np.uint8)
     return StereoImages(t, left, left, np.array([[100.0, 0, 80], [0, 100, 60], [0, 0, 1]]), 0.25)
@@ -53,7 +58,7 @@ def host_of() -> Iterator[Any]:
     yield make
     for host in hosts:
         host.close()
-    assert multiprocessing.active_children() == []
+    assert plugin_workers() == []
 
 
 def wait_for(call: PluginCall, now: float = 1e9, within_s: float = 20.0) -> Any:
@@ -114,6 +119,40 @@ def test_an_exception_is_a_fault_and_the_same_worker_answers_the_next_call(host_
     assert [f["error"] for f in recorder.faults()] == [
         "plug-in fault: RuntimeError('the test plug-in was asked to fail')"]
     assert after.details["pid"] == first.details["pid"] and after.matched == 3
+
+
+def test_a_result_that_cannot_be_sent_back_is_a_fault(host_of):
+    host, recorder = host_of("UnpicklableResultPlugin")
+    failed = wait_for(host.submit("referencing", frame(0.0), FAULT, 0.0))
+    after = wait_for(host.submit("referencing", frame(0.5), None, 0.5))
+    assert not failed.recognised and "could not be sent back" in failed.details["reason"]
+    assert len(recorder.faults()) == 1 and after.recognised
+
+
+def test_a_worker_killed_while_idle_is_replaced_and_the_fault_logged(host_of):
+    import os
+    import signal
+
+    host, recorder = host_of("EchoPlugin")
+    before = wait_for(host.submit("referencing", frame(0.0), None, 0.0))
+    os.kill(before.details["pid"], signal.SIGKILL)
+    time.sleep(0.2)
+    after = wait_for(host.submit("referencing", frame(1.0), None, 1.0))
+    assert after.recognised and after.details["pid"] != before.details["pid"]
+    [fault] = recorder.faults()
+    assert "while idle" in fault["error"] and "SIGKILL" in fault["error"]
+
+
+def test_a_worker_that_cannot_restart_breaks_its_role_with_one_fault(host_of, tmp_path):
+    host, recorder = host_of("StartsOncePlugin", {"marker": str(tmp_path / "configured")})
+    crashed = host.submit("referencing", frame(0.0), FAULT, 0.0)
+    queued = host.submit("referencing", frame(0.5), None, 0.5)
+    assert not wait_for(crashed).recognised
+    assert "plug-in unavailable: restart failed" in wait_for(queued).details["reason"]
+    later = host.submit("referencing", frame(1.0), None, 1.0)
+    assert later.poll(1.0) is not None and not later.poll(1.0).recognised  # at once, without a worker
+    errors = [f["error"] for f in recorder.faults()]
+    assert len(errors) == 2 and "SIGSEGV" in errors[0] and "configured once already" in errors[1]
 
 
 def test_results_come_back_in_submission_order_tagged_with_their_frame_time(host_of):
@@ -180,10 +219,22 @@ def test_in_simulated_time_a_call_over_its_cpu_budget_is_a_fault_charged_the_bud
     assert t == pytest.approx(5.1) and fields["frame_time"] == 5.0
 
 
+def test_in_simulated_time_a_crash_is_charged_a_quantum_and_the_restart_its_start_up_time(host_of):
+    host, recorder = host_of("SegfaultingPlugin", simulated_clock=True)
+    crashed = host.submit("referencing", frame(2.0), FAULT, 2.0)
+    queued = host.submit("referencing", frame(2.0), None, 2.0)
+    assert not crashed.poll(2.01).recognised and crashed.ready_at == pytest.approx(2.01)
+    assert queued.poll(2.05) is None
+    assert queued.poll(10.0).recognised
+    assert 2.01 + 0.1 <= queued.ready_at - 0.01 < 2.01 + 3.0  # the fresh interpreter's CPU time, in 0.1 s steps
+    assert queued.poll(queued.ready_at - 0.005) is None
+    assert [t for e, t, _ in recorder.events] == [pytest.approx(2.01)]
+
+
 def test_a_plugin_that_fails_to_configure_is_a_plugin_error_at_construction():
     with pytest.raises(PluginError, match="failed to start: ValueError\\('this plug-in never starts'\\)"):
         PluginHost({"referencing": TESTING + "BrokenPlugin"}, {}, Recorder())
-    assert multiprocessing.active_children() == []
+    assert plugin_workers() == []
 
 
 def test_close_stops_a_hung_worker_and_leaves_no_child_process():
@@ -194,6 +245,7 @@ def test_close_stops_a_hung_worker_and_leaves_no_child_process():
     t0 = time.monotonic()
     host.close()
     assert time.monotonic() - t0 < 1.0 + 1.0
-    assert multiprocessing.active_children() == []
+    assert plugin_workers() == []
     assert not hung.poll(1.0).recognised  # "the plug-in host was closed"
     assert not host.submit("odometry", frame(1.0), None, 1.0).poll(1.0).ok
+    assert plugin_workers() == []  # and nothing restarted them
