@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from mission.errors import AuvError, MissionError
+from mission.extras import has, require
 
 
 def _validate(args: argparse.Namespace) -> int:
@@ -46,6 +47,7 @@ def _schema(args: argparse.Namespace) -> int:
 
 
 def _simulate(args: argparse.Namespace) -> int:
+    require("mujoco", "the simulator (`auv simulate`)")
     from mission.language import validate_mission_file
     from mission.sim.run import check_supported, simulate
 
@@ -55,6 +57,9 @@ def _simulate(args: argparse.Namespace) -> int:
     for d in diags:  # warnings: legal, but probably not meant
         print(d, file=sys.stderr)
     check_supported(mission)
+    if not args.no_plots and not has("matplotlib"):
+        print("auv: matplotlib is not installed, so no figures (pip install 'auv-mission[plots]')", file=sys.stderr)
+        args.no_plots = True
     if args.seeds is not None:
         return _campaign(args, mission.name)
     out = Path(args.out) if args.out else Path("runs") / mission.name
@@ -107,6 +112,7 @@ def _campaign(args: argparse.Namespace, name: str) -> int:
 
 
 def _plot(args: argparse.Namespace) -> int:
+    require("matplotlib", "`auv plot`")
     from mission.plots import plot_run
 
     for path in plot_run(Path(args.run)):
@@ -202,6 +208,57 @@ def _model_build(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run(args: argparse.Namespace) -> int:
+    from mission.language import validate_mission_file
+    from mission.onboard.run import run_onboard
+
+    mission, diags = validate_mission_file(args.mission)
+    if mission is None:
+        raise MissionError([d for d in diags if not d.warning])
+    for d in diags:
+        print(d, file=sys.stderr)
+    out = Path(args.out) if args.out else Path("runs") / f"{mission.name}-onboard"
+    print(f"{mission.name}: connecting to {args.vehicle} (up to {args.connect_timeout:g} s)", file=sys.stderr)
+    result = run_onboard(mission, args.vehicle, out, connect_timeout=args.connect_timeout)
+    m = result.metrics
+    state = "completed" if m["completed"] else ("LINK LOST" if m["link_lost"] else
+                                                "STOPPED" if m["stopped"] else
+                                                "ABORTED: " + (m["abort_reason"] or "") if m["aborted"]
+                                                else "not completed")
+    print(f"{mission.name}: {state}; {m['mission_time_s']:.0f} s of vehicle time in {m['wall_time_s']:.1f} s, "
+          f"{m['distance_m']:.0f} m (estimated), {m['energy_wh']:.0f} Wh")
+    for e in m["elements"]:
+        extra = f" ({e['reason']})" if e.get("reason") else ""
+        print(f"  {e['id']:<24} {e['kind']:<9} {e['status']:<10} {e['duration_s']:8.1f} s{extra}")
+    print(f"run folder: {out}")
+    return 0 if m["completed"] else 1
+
+
+def _vehicles(args: argparse.Namespace) -> int:
+    from mission.vehicles import installed_vehicles
+
+    found = installed_vehicles()
+    if args.json:
+        print(json.dumps(found, indent=2))
+    elif not found:
+        print("no vehicle adapters installed (entry-point group auv.vehicles)")
+    for scheme, target in sorted(found.items()):
+        if not args.json:
+            print(f"{scheme:<12} {target}")
+    return 0
+
+
+def _score(args: argparse.Namespace) -> int:
+    from mission.score import score_run
+
+    m = score_run(args.run, args.truth)
+    nav = m["navigation"]
+    print(f"{args.run}: scored against {args.truth}: nav error rms {nav['position_error_rms_m']:.2f} m, "
+          f"max {nav['position_error_max_m']:.2f} m; {m['distance_m']:.0f} m truly flown; "
+          f"{m['seabed_contacts']} seabed contact(s)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="auv", description="Plan, simulate and execute AUV inspection missions.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -260,6 +317,24 @@ def build_parser() -> argparse.ArgumentParser:
                    help="Gaussian low-pass σ (px) on the images (default 0.7; 0 turns it off)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_vo)
+
+    p = sub.add_parser("run", help="fly a mission on a vehicle (onboard executive, the vehicle's clock)")
+    p.add_argument("mission", help="mission YAML file")
+    p.add_argument("--vehicle", required=True, metavar="URI",
+                   help="vehicle adapter and address, e.g. mavlink:udpin:0.0.0.0:14550 (`auv vehicles` lists them)")
+    p.add_argument("--out", help="run folder (default: runs/MISSION_NAME-onboard)")
+    p.add_argument("--connect-timeout", type=float, default=10.0, metavar="S",
+                   help="seconds to wait for the vehicle (default 10)")
+    p.set_defaults(func=_run)
+
+    p = sub.add_parser("vehicles", help="list installed vehicle adapters (entry-point group auv.vehicles)")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=_vehicles)
+
+    p = sub.add_parser("score", help="score an `auv run` folder against the truth `auv sim serve --out` kept")
+    p.add_argument("run", help="run folder written by `auv run`")
+    p.add_argument("--truth", required=True, help="folder written by `auv sim serve --out`")
+    p.set_defaults(func=_score)
 
     p = sub.add_parser("model", help="multi-view object models (seed 000 §3.1)")
     msub = p.add_subparsers(dest="model_command", required=True)

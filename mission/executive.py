@@ -1,11 +1,19 @@
 """The strategic level (seed 002 §1): run the route elements in order, one tactical agent each, under the
 safety monitors; log every event as it happens; on a violation, abort per the mission's `on_violation`.
 
-The executive sees only the vehicle interface (the estimate), never the simulator or plotting.
+The executive sees only the vehicle interface (the estimate), never the simulator or plotting. It runs on the
+vehicle's clock: `VehicleInterface.advance` lets one control period pass, simulated or real. Onboard it also
+- pauses the mission while a pilot has taken the vehicle over (`Observation.in_control` false): agents are not
+  stepped, element timers stop, and the mission goes on where it was when the pilot hands the vehicle back;
+- ends the run when the vehicle's link is lost (`LinkLostError`): it logs `link_lost` with the mission's
+  `on_violation` policy (which it can no longer carry out: the autopilot's own failsafe takes over);
+- stops cleanly when asked (`request_stop`, from SIGINT/SIGTERM): the vehicle is told to hold, then to surface if
+  the mission's `on_violation` says so.
 """
 
 from __future__ import annotations
 
+import enum
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -14,21 +22,33 @@ from typing import Any, Literal
 from mission.agents import REGISTRY, Agent, AgentContext, Status
 from mission.agents.transit import TransitAgent
 from mission.artifacts import Artifacts
+from mission.errors import LinkLostError
 from mission.knowledge import Knowledge
 from mission.language.models import Mission, RouteElement, Transit
 from mission.plugin_host import PluginHost
 from mission.safety import SafetyMonitors, Violation
 from mission.strategy import inspection_run, order_objects
-from mission.vehicle import Command, NavState, VehicleInterface
+from mission.vehicle import Command, NavState, Observation, VehicleInterface
 
 MARGIN_S = 120.0  # extra time every default timeout allows
+
+
+class ElementStatus(enum.StrEnum):
+    """How a route element ended (a `str`, so that it compares and serialises as its value)."""
+
+    RUNNING = "running"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    TIMEOUT = "timeout"
+    ABORTED = "aborted"
+    SKIPPED = "skipped"
 
 
 @dataclass
 class ElementReport:
     id: str
     kind: str
-    status: str  # succeeded | failed | timeout | aborted | skipped
+    status: ElementStatus
     start_time: float = math.nan
     end_time: float = math.nan
     reason: str = ""
@@ -50,6 +70,9 @@ class ExecutionReport:
     start_time: float = 0.0
     end_time: float = 0.0
     knowledge: Knowledge = field(default_factory=Knowledge)
+    link_lost: bool = False
+    stopped: bool = False  # stopped on request (SIGINT/SIGTERM onboard)
+    paused_s: float = 0.0  # time a pilot had the vehicle
 
 
 def default_timeout(element: RouteElement, nav: NavState, mission: Mission) -> float:
@@ -66,6 +89,12 @@ def default_timeout(element: RouteElement, nav: NavState, mission: Mission) -> f
         return 2.0 * (horizontal + vertical / mission.vehicle.max_vertical_speed) + MARGIN_S
     budget = getattr(params, "budget", None)
     return float(budget) * 1.2 + MARGIN_S if budget is not None else mission.safety.max_duration
+
+
+def unsupported_elements(mission: Mission, agents: Mapping[str, object] | None = None) -> list[RouteElement]:
+    """The route elements whose kind has no agent (in `agents`, by default the registry)."""
+    kinds = REGISTRY if agents is None else agents
+    return [e for e in mission.route if e.kind not in kinds]
 
 
 class Executive:
@@ -85,9 +114,16 @@ class Executive:
         self.usbl_available = mission.sensors.usbl is not None
         self.plugins = plugins
         self.artifacts = artifacts if artifacts is not None else Artifacts()
+        self._stop_reason = ""
+        self._paused_since: float | None = None
+        self._last_nav: NavState | None = None
+
+    def request_stop(self, reason: str = "stopped by the operator") -> None:
+        """Ask the run to end at the next control tick (safe to call from a signal handler)."""
+        self._stop_reason = reason
 
     def unsupported(self) -> list[RouteElement]:
-        return [e for e in self.mission.route if e.kind not in self.agents]
+        return unsupported_elements(self.mission, self.agents)
 
     def _violations(self, nav: NavState, element_id: str) -> list[Violation]:
         assert self.monitors is not None
@@ -102,14 +138,14 @@ class Executive:
     def _run(self, element_id: str, kind: str, agent: Agent, element: RouteElement, aborting: bool
              ) -> ElementReport:
         nav = self.vehicle.observe().nav
-        rep = ElementReport(element_id, kind, "running", start_time=nav.time)
+        rep = ElementReport(element_id, kind, ElementStatus.RUNNING, start_time=nav.time)
         timeout = default_timeout(element, nav, self.mission)
         try:
             agent.start(AgentContext(self.mission, element, nav, self.emit, self.report.knowledge, self.plugins,
                                      self.artifacts))
             rep.planned_path = [tuple(map(float, p)) for p in agent.planned_path()]  # type: ignore[misc]
         except Exception as exc:  # an agent's fault is the element's failure, never the executive's crash
-            rep.status, rep.reason, rep.end_time = "failed", f"agent failed to start: {exc!r}", nav.time
+            rep.status, rep.reason, rep.end_time = ElementStatus.FAILED, f"agent failed to start: {exc!r}", nav.time
             self.emit("element_failed", nav.time, element=element_id, kind=kind, reason=rep.reason)
             return rep
         aided = self.usbl_available and agent.navigation == "usbl"
@@ -119,27 +155,76 @@ class Executive:
         self.vehicle.set_frame_rate(rate)
         self.emit("element_started", nav.time, element=element_id, kind=kind, timeout_s=timeout,
                   navigation="usbl" if aided else "dead-reckoning", planned_path=rep.planned_path, abort=aborting)
+        try:
+            self._loop(rep, agent, element_id, timeout, aborting, payload, rate, aided)
+        except LinkLostError as exc:
+            rep.status, rep.reason = ElementStatus.ABORTED, f"link lost: {exc}"
+            self.report.link_lost = True
+        nav = self._last_nav if self._last_nav is not None else nav
+        try:
+            agent.stop()
+        except Exception as exc:
+            self.emit("agent_fault", nav.time, element=element_id, error=repr(exc))
+        if not self.report.link_lost:
+            self.vehicle.set_payload(frozenset())
+            self.vehicle.set_frame_rate(None)
+        if self.plugins is not None:
+            self.plugins.reset()
+        rep.end_time = nav.time
+        rep.details = dict(agent.details)
+        event = "element_finished" if rep.status is ElementStatus.SUCCEEDED else "element_failed"
+        self.emit(event, nav.time, element=element_id, kind=kind, status=rep.status, reason=rep.reason,
+                  duration_s=rep.duration_s, north=nav.north, east=nav.east, depth=nav.depth)
+        return rep
+
+    def _paused(self, obs: Observation, element_id: str) -> bool:
+        """Track a pilot's take-over: True while the vehicle is not ours (the agent is not stepped)."""
+        now = obs.nav.time
+        if not obs.in_control:
+            if self._paused_since is None:
+                self._paused_since = now
+                self.emit("mission_paused", now, element=element_id, reason="a pilot took the vehicle over")
+            return True
+        if self._paused_since is not None:
+            held = now - self._paused_since
+            self.report.paused_s += held
+            self._paused_since = None
+            self.emit("mission_resumed", now, element=element_id, paused_s=held)
+        return False
+
+    def _loop(self, rep: ElementReport, agent: Agent, element_id: str, timeout: float, aborting: bool,
+              payload: frozenset[str], rate: float | None, aided: bool) -> None:
+        """Step the agent every control tick until it ends, times out, trips a monitor or is stopped."""
+        paused_at_start = self.report.paused_s
         while True:
             obs = self.vehicle.observe()
             nav = obs.nav
+            self._last_nav = nav
+            if self._paused(obs, element_id):
+                self._violations(nav, element_id)  # logged; the pilot is responsible while in control
+                self.vehicle.advance()
+                continue
             if self._violations(nav, element_id) and not aborting:
-                rep.status, rep.reason = "aborted", "safety violation"
-                break
-            if nav.time - rep.start_time > timeout:
-                rep.status, rep.reason = "timeout", f"not finished within {timeout:.0f} s"
-                break
+                rep.status, rep.reason = ElementStatus.ABORTED, "safety violation"
+                return
+            if self._stop_reason and not aborting:
+                rep.status, rep.reason = ElementStatus.ABORTED, self._stop_reason
+                return
+            if nav.time - rep.start_time - (self.report.paused_s - paused_at_start) > timeout:
+                rep.status, rep.reason = ElementStatus.TIMEOUT, f"not finished within {timeout:.0f} s"
+                return
             try:
                 command = agent.step(obs)
             except Exception as exc:
-                rep.status, rep.reason = "failed", f"agent fault: {exc!r}"
+                rep.status, rep.reason = ElementStatus.FAILED, f"agent fault: {exc!r}"
                 self.emit("agent_fault", nav.time, element=element_id, error=repr(exc))
-                break
+                return
             if agent.status is Status.SUCCEEDED:
-                rep.status = "succeeded"
-                break
+                rep.status = ElementStatus.SUCCEEDED
+                return
             if agent.status is Status.FAILED:
-                rep.status, rep.reason = "failed", agent.reason
-                break
+                rep.status, rep.reason = ElementStatus.FAILED, agent.reason
+                return
             if agent.payload != payload:
                 payload = agent.payload
                 self.vehicle.set_payload(payload)
@@ -155,20 +240,6 @@ class Executive:
             self.vehicle.advance()
             if self.on_tick is not None:
                 self.on_tick(nav)
-        try:
-            agent.stop()
-        except Exception as exc:
-            self.emit("agent_fault", nav.time, element=element_id, error=repr(exc))
-        self.vehicle.set_payload(frozenset())
-        self.vehicle.set_frame_rate(None)
-        if self.plugins is not None:
-            self.plugins.reset()
-        rep.end_time = nav.time
-        rep.details = dict(agent.details)
-        event = "element_finished" if rep.status == "succeeded" else "element_failed"
-        self.emit(event, nav.time, element=element_id, kind=kind, status=rep.status, reason=rep.reason,
-                  duration_s=rep.duration_s, north=nav.north, east=nav.east, depth=nav.depth)
-        return rep
 
     def _abort(self, reason: str) -> None:
         """Go to the abort point at a safe depth, then surface there (per `safety.on_violation`)."""
@@ -199,15 +270,38 @@ class Executive:
         """Run the whole route; returns what happened (the event log has the details)."""
         m = self.mission
         nav = self.vehicle.observe().nav
+        self._last_nav = nav
         self.monitors = SafetyMonitors(m.safety, m.vehicle.energy_wh, nav.time)
         self.report.start_time = nav.time
         self.emit("mission_started", nav.time, mission=m.name, elements=[e.id for e in m.route])
+        abort_reason = self._route()
+        if abort_reason and not self.report.link_lost and not self._stop_reason:
+            try:
+                self._abort(abort_reason)
+            except LinkLostError:
+                self.report.link_lost = True
+        nav = self._last_nav
+        if self.report.link_lost:
+            self._lost(nav)
+        else:
+            self._finish_safe(nav)
+        self.report.end_time = nav.time
+        self.report.completed = not abort_reason and not self.report.link_lost and all(
+            r.status is ElementStatus.SUCCEEDED for r in self.report.elements)
+        self.emit("mission_finished", nav.time, completed=self.report.completed, aborted=self.report.aborted,
+                  reason=self.report.abort_reason)
+        return self.report
+
+    def _route(self) -> str:
+        """Run the route elements in order; the reason to abort, or "" when every element had its chance."""
+        m = self.mission
         abort_reason = ""
         route = list(m.route)
         for index in range(len(route)):
+            nav = self._last_nav
+            assert nav is not None
             end = inspection_run(route, index)
-            if end - index >= 2 and (index == 0 or route[index - 1].inspect is None):
-                nav = self.vehicle.observe().nav
+            if not abort_reason and end - index >= 2 and (index == 0 or route[index - 1].inspect is None):
                 ordered = order_objects(m, route[index:end], nav.north, nav.east, m.seed)
                 if ordered != route[index:end]:
                     route[index:end] = ordered
@@ -215,35 +309,56 @@ class Executive:
                               reason="inspections in the shortest visiting order")
             element = route[index]
             if abort_reason:
-                self.report.elements.append(ElementReport(element.id, element.kind, "skipped"))
+                self.report.elements.append(ElementReport(element.id, element.kind, ElementStatus.SKIPPED))
                 continue
-            factory = self.agents.get(element.kind)
-            if factory is None:
-                rep = ElementReport(element.id, element.kind, "failed", nav.time, nav.time,
-                                    reason=f"no agent for kind '{element.kind}'")
-                self.emit("element_failed", nav.time, element=element.id, kind=element.kind, reason=rep.reason)
-            else:
-                try:
-                    agent = factory()
-                except Exception as exc:  # a broken agent class fails its element, not the executive
-                    agent = None
-                    rep = ElementReport(element.id, element.kind, "failed", nav.time, nav.time,
-                                        reason=f"agent could not be created: {exc!r}")
-                    self.emit("element_failed", nav.time, element=element.id, kind=element.kind, reason=rep.reason)
-                if agent is not None:
-                    rep = self._run(element.id, element.kind, agent, element, aborting=False)
+            rep = self._element(element, nav)
             self.report.elements.append(rep)
-            if rep.status == "aborted":
+            if self.report.link_lost:
+                abort_reason = f"link lost during '{element.id}'"
+            elif self._stop_reason:
+                abort_reason = self._stop_reason
+            elif rep.status is ElementStatus.ABORTED:
                 abort_reason = "; ".join(v["message"] for v in self.report.violations[-3:])
-            elif rep.status != "succeeded" and element.on_failure == "abort":
+            elif rep.status is not ElementStatus.SUCCEEDED and element.on_failure == "abort":
                 abort_reason = f"element '{element.id}' {rep.status}: {rep.reason}"
         if abort_reason:
-            self._abort(abort_reason)
-        nav = self.vehicle.observe().nav
-        self.vehicle.apply(Command.hold(nav))
-        self.report.end_time = nav.time
-        self.report.completed = not abort_reason and all(
-            r.status == "succeeded" for r in self.report.elements)
-        self.emit("mission_finished", nav.time, completed=self.report.completed, aborted=self.report.aborted,
-                  reason=self.report.abort_reason)
-        return self.report
+            self.report.abort_reason = abort_reason
+        return abort_reason
+
+    def _element(self, element: RouteElement, nav: NavState) -> ElementReport:
+        """Create the element's agent and run it; a broken agent class fails its element, not the executive."""
+        factory = self.agents.get(element.kind)
+        reason = f"no agent for kind '{element.kind}'"
+        if factory is not None:
+            try:
+                return self._run(element.id, element.kind, factory(), element, aborting=False)
+            except LinkLostError:
+                raise
+            except Exception as exc:
+                reason = f"agent could not be created: {exc!r}"
+        self.emit("element_failed", nav.time, element=element.id, kind=element.kind, reason=reason)
+        return ElementReport(element.id, element.kind, ElementStatus.FAILED, nav.time, nav.time, reason=reason)
+
+    def _lost(self, nav: NavState) -> None:
+        """The link is gone: nothing can be commanded any more. Log what the mission asked for on a violation."""
+        policy = self.mission.safety.on_violation
+        self.report.aborted = True
+        self.report.abort_reason = self.report.abort_reason or "link lost"
+        self.emit("link_lost", nav.time, timeout_s=self.mission.safety.link_timeout,
+                  on_violation={"abort_to": policy.abort_to if isinstance(policy.abort_to, str)
+                                else policy.abort_to.model_dump(), "surface": policy.surface},
+                  note="the vehicle's own failsafe takes over; the mission's policy cannot be carried out")
+
+    def _finish_safe(self, nav: NavState) -> None:
+        """Leave the vehicle holding; after a stop request, surface it if the mission says so."""
+        try:
+            self.vehicle.apply(Command.hold(nav))
+            if self._stop_reason:
+                self.report.stopped = self.report.aborted = True
+                surface = self.mission.safety.on_violation.surface
+                self.emit("stopped", nav.time, reason=self._stop_reason, surface=surface)
+                if surface:
+                    self.vehicle.apply(Command(heading=nav.heading, speed=0.0, depth=0.0))
+        except LinkLostError:
+            self.report.link_lost = True
+            self._lost(nav)

@@ -1,8 +1,9 @@
-"""Run folders: one writer and one reader for the files `auv simulate` leaves behind.
+"""Run folders: one writer and one reader for the files `auv simulate` and `auv run` leave behind.
 
     DIR/mission.yaml      the mission as run (seed filled in, world pointing at the copy beside it)
     DIR/world.yaml        the world the run used
-    DIR/trajectory.csv    time, true and estimated pose, altitude, per control step
+    DIR/trajectory.csv    time, true and estimated pose, altitude, per control step (`auv run` knows no truth:
+                          its true columns stay empty until `auv score` fills them from the simulator's)
     DIR/usbl.csv          acoustic fixes: time, north, east, used, accepted
     DIR/events.jsonl      events, flushed as they happened
     DIR/metrics.json      the run's metrics
@@ -14,10 +15,13 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import shutil
+import time
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import numpy as np
 import yaml
@@ -27,7 +31,43 @@ from mission.events import read_events
 from mission.knowledge import Knowledge
 from mission.language.loader import load_mission
 from mission.language.models import Mission
-from mission.sim.vehicle import TRAJECTORY_COLUMNS, SimulatedVehicle
+
+TRAJECTORY_COLUMNS = (
+    "time", "north", "east", "depth", "heading", "altitude",
+    "north_est", "east_est", "depth_est", "heading_est", "altitude_est",
+    "position_sigma", "speed", "energy_wh", "element",
+)
+FLUSH_S = 1.0  # a streamed file is flushed at least this often (wall time): a killed run loses at most this
+
+
+def _cell(value: object) -> object:
+    if isinstance(value, float):
+        return f"{value:.4f}" if math.isfinite(value) else ""
+    return "" if value is None else value
+
+
+class TrajectoryWriter:
+    """trajectory.csv written as the run goes: a row per control tick, flushed at least every `FLUSH_S`."""
+
+    def __init__(self, path: Path, columns: Sequence[str] = TRAJECTORY_COLUMNS):
+        self._file: IO[str] | None = path.open("w", newline="", encoding="utf-8")
+        self._csv = csv.writer(self._file)
+        self._csv.writerow(columns)
+        self._file.flush()
+        self._flushed = time.monotonic()
+
+    def write(self, row: Iterable[object]) -> None:
+        if self._file is None:
+            return
+        self._csv.writerow([_cell(v) for v in row])
+        if time.monotonic() - self._flushed >= FLUSH_S:
+            self._file.flush()
+            self._flushed = time.monotonic()
+
+    def close(self) -> None:
+        if self._file is not None:
+            self._file.close()
+            self._file = None
 
 
 def prepare_run_folder(out: Path, mission: Mission, seed: int) -> None:
@@ -48,19 +88,34 @@ def prepare_run_folder(out: Path, mission: Mission, seed: int) -> None:
     (out / "mission.yaml").write_text(header + yaml.safe_dump(as_run, sort_keys=False), encoding="utf-8")
 
 
-def write_run_results(out: Path, metrics: dict[str, Any], vehicle: SimulatedVehicle,
-                      knowledge: Knowledge | None = None) -> None:
-    with (out / "trajectory.csv").open("w", newline="", encoding="utf-8") as f:
-        w = csv.writer(f)
-        w.writerow(TRAJECTORY_COLUMNS)
-        for row in vehicle.log.rows:
-            w.writerow([f"{v:.4f}" if isinstance(v, float) else v for v in row])
+def write_trajectory(out: Path, rows: Iterable[Sequence[object]]) -> None:
+    writer = TrajectoryWriter(out / "trajectory.csv")
+    for row in rows:
+        writer.write(row)
+    writer.close()
+
+
+def write_usbl(out: Path, fixes: Iterable[Any]) -> None:
+    """usbl.csv from fixes with time, north, east, used, accepted."""
     with (out / "usbl.csv").open("w", newline="", encoding="utf-8") as f:
         w = csv.writer(f)
         w.writerow(("time", "north", "east", "used", "accepted"))
-        for fix in vehicle.log.fixes:
+        for fix in fixes:
             w.writerow((f"{fix.time:.2f}", f"{fix.north:.3f}", f"{fix.east:.3f}", int(fix.used), int(fix.accepted)))
-    (out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n", encoding="utf-8")
+
+
+def write_metrics(out: Path, metrics: dict[str, Any]) -> None:
+    """metrics.json, written whole or not at all (a temporary file renamed over the old one)."""
+    tmp = out / "metrics.json.tmp"
+    tmp.write_text(json.dumps(metrics, indent=2) + "\n", encoding="utf-8")
+    tmp.replace(out / "metrics.json")
+
+
+def write_run_results(out: Path, metrics: dict[str, Any], rows: Iterable[Sequence[object]], fixes: Iterable[Any],
+                      knowledge: Knowledge | None = None) -> None:
+    write_trajectory(out, rows)
+    write_usbl(out, fixes)
+    write_metrics(out, metrics)
     if knowledge is not None and knowledge.maps:
         (out / "maps").mkdir(exist_ok=True)
         for element, products in knowledge.maps.items():
@@ -84,7 +139,8 @@ class RunData:
     maps: dict[str, dict[str, np.ndarray]]
 
 
-def _read_csv(path: Path, text_columns: tuple[str, ...] = ()) -> tuple[dict[str, np.ndarray], dict[str, list[str]]]:
+def read_csv(path: Path, text_columns: tuple[str, ...] = ()) -> tuple[dict[str, np.ndarray], dict[str, list[str]]]:
+    """A CSV file with a header line: numeric columns as arrays (empty cells NaN), `text_columns` as strings."""
     try:
         with path.open(newline="", encoding="utf-8") as f:
             rows = list(csv.reader(f))
@@ -118,13 +174,13 @@ def read_run_folder(folder: str | Path) -> RunData:
         mission = load_mission(folder / "mission.yaml", environment=False)
     except MissionError as exc:
         raise RunFolderError(f"{folder}/mission.yaml is not a valid mission:\n{exc}") from exc
-    traj, text = _read_csv(folder / "trajectory.csv", ("element",))
+    traj, text = read_csv(folder / "trajectory.csv", ("element",))
     missing = [c for c in TRAJECTORY_COLUMNS if c not in traj and c not in text]
     if missing:
         raise RunFolderError(f"{folder}/trajectory.csv lacks column(s) {', '.join(missing)}")
     fixes: dict[str, np.ndarray] = {}
     if (folder / "usbl.csv").is_file():
-        fixes, _ = _read_csv(folder / "usbl.csv")
+        fixes, _ = read_csv(folder / "usbl.csv")
     try:
         metrics = json.loads((folder / "metrics.json").read_text(encoding="utf-8"))
     except json.JSONDecodeError as exc:

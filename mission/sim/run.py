@@ -99,7 +99,7 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
         from mission.sim.photos import write_photos
 
         write_photos(out_dir, report.knowledge, vehicle)  # photo surveys' pairs: photos/, out of the maps
-        write_run_results(out_dir, metrics, vehicle, report.knowledge)
+        write_run_results(out_dir, metrics, vehicle.log.rows, vehicle.log.fixes, report.knowledge)
         if plots:
             from mission.plots import plot_run
 

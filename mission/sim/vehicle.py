@@ -15,6 +15,7 @@ import numpy as np
 from mission.language.models import Mission
 from mission.navigation import NavigationFilter
 from mission.plugin_api import StereoImages
+from mission.runfolder import TRAJECTORY_COLUMNS as TRAJECTORY_COLUMNS
 from mission.sim import kinematics
 from mission.sim.kinematics import TrueState
 from mission.vehicle import HOVER_GAIN, HOVER_SPEED, Command, NavState, Observation, ScanFrame, SonarPing
@@ -25,11 +26,6 @@ DEPTH_SIGMA_M = 0.02
 ALTITUDE_SIGMA_M = 0.05
 USBL_OUTLIER_RATE = 0.02  # multipath: this share of fixes is off by several sigma
 
-TRAJECTORY_COLUMNS = (
-    "time", "north", "east", "depth", "heading", "altitude",
-    "north_est", "east_est", "depth_est", "heading_est", "altitude_est",
-    "position_sigma", "speed", "energy_wh", "element",
-)
 
 
 @dataclass

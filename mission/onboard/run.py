@@ -1,0 +1,163 @@
+"""`auv run MISSION --vehicle URI`: the executive flies a mission on a vehicle, paced by the vehicle's clock.
+
+The run folder is written as the run goes: `events.jsonl` flushed per event, `trajectory.csv` (the estimate; the
+true columns stay empty) flushed at least every second, `metrics.json` at the end (`mission.onboard.report`).
+A `kill -9` therefore loses at most the last second of the trajectory. SIGINT and SIGTERM ask the executive to
+stop: the vehicle is told to hold, then to surface if the mission's `on_violation` says so; a second SIGINT
+interrupts at once.
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from types import FrameType
+from typing import Any
+
+from mission.artifacts import Artifacts
+from mission.errors import UnsupportedMissionError
+from mission.events import EventLog
+from mission.executive import ExecutionReport, Executive, unsupported_elements
+from mission.language.models import Mission
+from mission.onboard.report import onboard_metrics
+from mission.plugin_host import PluginHost
+from mission.plugin_settings import plugin_settings
+from mission.runfolder import TrajectoryWriter, prepare_run_folder, write_metrics
+from mission.vehicle import Command, Observation
+from mission.vehicles import OnboardVehicle, VehicleOptions, open_vehicle
+
+
+@dataclass
+class OnboardResult:
+    metrics: dict[str, Any]
+    report: ExecutionReport
+    out: Path
+
+
+class RecordingVehicle:
+    """The adapter as the executive sees it, writing a trajectory row whenever the vehicle's clock moves on."""
+
+    def __init__(self, vehicle: OnboardVehicle, writer: TrajectoryWriter):
+        self.vehicle = vehicle
+        self.writer = writer
+        self.control_period = vehicle.control_period
+        self.element = ""
+        self.distance_m = 0.0
+        self.energy_start_wh: float | None = None
+        self.energy_wh = math.nan
+        self._last: tuple[float, float, float, float] | None = None
+
+    def observe(self) -> Observation:
+        obs = self.vehicle.observe()
+        nav = obs.nav
+        if self._last is None or nav.time > self._last[0]:
+            if self._last is not None:
+                self.distance_m += math.dist(self._last[1:], (nav.north, nav.east, nav.depth))
+            self._last = (nav.time, nav.north, nav.east, nav.depth)
+            if self.energy_start_wh is None:
+                self.energy_start_wh = nav.energy_wh
+            self.energy_wh = nav.energy_wh
+            altitude = nav.altitude if nav.altitude is not None else math.nan
+            nan = math.nan
+            self.writer.write((nav.time, nan, nan, nan, nan, nan, nav.north, nav.east, nav.depth, nav.heading,
+                               altitude, nav.position_sigma, nav.speed, nav.energy_wh, self.element))
+        return obs
+
+    def apply(self, command: Command) -> None:
+        self.vehicle.apply(command)
+
+    def set_aiding(self, usbl: bool) -> None:
+        self.vehicle.set_aiding(usbl)
+
+    def set_payload(self, sensors: frozenset[str]) -> None:
+        self.vehicle.set_payload(sensors)
+
+    def set_frame_rate(self, rate_hz: float | None) -> None:
+        self.vehicle.set_frame_rate(rate_hz)
+
+    def advance(self) -> None:
+        self.vehicle.advance()
+
+    @property
+    def energy_used_wh(self) -> float:
+        if self.energy_start_wh is None or not math.isfinite(self.energy_wh):
+            return 0.0
+        return max(0.0, self.energy_start_wh - self.energy_wh)
+
+
+@contextmanager
+def stop_on_signals(executive: Executive) -> Iterator[None]:
+    """SIGINT/SIGTERM ask the executive to stop cleanly; a second SIGINT interrupts at once."""
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+
+    def handler(signum: int, frame: FrameType | None) -> None:
+        executive.request_stop(f"stopped by {signal.Signals(signum).name}")
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+    for s in previous:
+        signal.signal(s, handler)
+    try:
+        yield
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
+def run_onboard(mission: Mission, uri: str, out: str | Path, connect_timeout: float = 10.0,
+                seed: int | None = None, signals: bool = True) -> OnboardResult:
+    """Fly `mission` on the vehicle at `uri` and write the run folder `out` (see the module docstring).
+
+    Raises `VehicleError` when the vehicle cannot be opened (the run folder then holds the mission and an
+    event saying why)."""
+    missing = unsupported_elements(mission)
+    if missing:
+        raise UnsupportedMissionError(
+            f"cannot run '{mission.name}': no agent for {', '.join(f'{e.id} ({e.kind})' for e in missing)}")
+    out = Path(out)
+    seed = mission.seed if seed is None else seed
+    prepare_run_folder(out, mission, seed)
+    log = EventLog(out / "events.jsonl")
+    writer = TrajectoryWriter(out / "trajectory.csv")
+    recording: RecordingVehicle | None = None
+
+    def emit(event: str, t: float, **fields: Any) -> None:
+        if event == "element_started" and recording is not None:
+            recording.element = str(fields.get("element", ""))
+        log.emit(event, t, **fields)
+
+    wall0 = time.perf_counter()
+    host: PluginHost | None = None
+    try:
+        try:
+            vehicle = open_vehicle(uri, mission, VehicleOptions(connect_timeout=connect_timeout, emit=emit))
+        except Exception as exc:
+            log.emit("vehicle_unavailable", 0.0, vehicle=uri, reason=str(exc))
+            raise
+        recording = RecordingVehicle(vehicle, writer)
+        try:
+            roles = mission.plugins.model_dump()
+            host = PluginHost(roles, plugin_settings(mission), emit) if any(roles.values()) else None
+            executive = Executive(mission, recording, emit, plugins=host, artifacts=Artifacts(out))
+            if signals:
+                with stop_on_signals(executive):
+                    report = executive.run()
+            else:
+                report = executive.run()
+        finally:
+            if host is not None:
+                host.close()
+            vehicle.close()
+        wall = time.perf_counter() - wall0
+        metrics = onboard_metrics(mission.name, seed, report, wall, recording.distance_m,
+                                  recording.energy_used_wh, mission.vehicle.energy_wh)
+        write_metrics(out, metrics)
+    finally:
+        writer.close()
+        log.close()
+    return OnboardResult(metrics, report, out)
+
