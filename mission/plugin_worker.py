@@ -165,6 +165,9 @@ class WorkerProcess:
         return not self.ended and self.process.is_alive()
 
     def exit_description(self) -> str:
+        """How the worker ended, once its pipe has closed (it is then exiting: wait briefly to reap it)."""
+        if self.process.exitcode is None:
+            self.process.join(0.2)
         code = self.process.exitcode
         if code is None:
             return "its pipe closed"
