@@ -183,8 +183,9 @@ def transit_mission(write_mission: Any) -> Iterator[Any]:
     yield load_mission(write_mission("plugin-faults", "  - id: watch\n    transit: {to: {north: 0, east: 0}}\n"))
 
 
-@pytest.mark.parametrize("plugin", ["SleepingPlugin", "SegfaultingPlugin"])
-def test_control_ticks_go_on_at_their_rate_while_a_plugin_hangs_or_crashes(transit_mission, plugin):
+@pytest.mark.parametrize(("plugin", "fault"), [("SleepingPlugin", "no answer within 1 s"),
+                                               ("SegfaultingPlugin", "killed by SIGSEGV")])
+def test_control_ticks_go_on_at_their_rate_while_a_plugin_hangs_or_crashes(transit_mission, plugin, fault):
     events: list[tuple[str, dict[str, Any]]] = []
     host = PluginHost({"referencing": f"mission.testing_plugins:{plugin}"}, {}, lambda e, t, **f: events.append(
         (e, f)), budget_s=1.0)
@@ -205,6 +206,7 @@ def test_control_ticks_go_on_at_their_rate_while_a_plugin_hangs_or_crashes(trans
     assert vehicle.missed <= 1, f"{vehicle.missed} control ticks missed"
     faults = [f for e, f in events if e == "plugin_fault"]
     assert len(faults) == 1 and faults[0]["frame_time"] == agent.calls[5].frame_time
+    assert fault in faults[0]["error"] and faults[0]["worker_restarted"] is True
     assert not agent.results[agent.calls[5].frame_time].recognised
     answered = [agent.results[c.frame_time] for c in agent.calls if c.frame_time in agent.results]
     assert sum(r.recognised for r in answered) >= 10  # before and after the fault
