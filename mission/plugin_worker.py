@@ -14,8 +14,8 @@ in order:
 fresh interpreter: the host's process may hold MuJoCo, OpenGL contexts and threads, which must never be forked),
 sends messages through a feeder thread (a 1 MB stereo frame never blocks the control loop on a busy worker's
 full pipe), and reads answers without blocking. Frames are pickled through the pipe: measured here, a round trip
-costs about 2 ms per MB of stereo pair and `submit` 0.05 ms of the caller's time, so shared memory is not used. A killed or crashed worker is replaced by a new incarnation;
-this class never restarts itself.
+costs about 2 ms per MB of stereo pair and `submit` 0.05 ms of the caller's time, so shared memory is not used.
+A killed or crashed worker is replaced by a new incarnation; this class never restarts itself.
 """
 
 from __future__ import annotations

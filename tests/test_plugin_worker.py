@@ -173,6 +173,22 @@ def test_results_come_back_in_submission_order_tagged_with_their_frame_time(host
     assert recorder.faults() == []
 
 
+def test_a_2_mb_stereo_pair_goes_to_the_worker_and_back_in_a_small_part_of_a_control_tick(host_of):
+    """Frames are pickled through a pipe (about 2 ms per MB here); a 5 Hz tick is 200 ms."""
+    host, _ = host_of("EchoPlugin")
+    big = frame(0.0, (900, 1200))
+    wait_for(host.submit("referencing", big, None, 0.0))
+    round_trips, submits = [], []
+    for k in range(10):
+        t0 = time.perf_counter()
+        call = host.submit("referencing", big, None, float(k))
+        submits.append(time.perf_counter() - t0)
+        wait_for(call)
+        round_trips.append(time.perf_counter() - t0)
+    assert float(np.median(round_trips)) < 0.05
+    assert float(np.median(submits)) < 0.005  # the caller's share: queuing, not pickling or writing
+
+
 def test_reset_reaches_the_worker_behind_the_calls_already_submitted(host_of):
     host, _ = host_of("EchoPlugin")
     first = [host.submit("referencing", frame(t), None, t) for t in (0.0, 0.1)]
@@ -234,6 +250,12 @@ def test_in_simulated_time_a_crash_is_charged_a_quantum_and_the_restart_its_star
 def test_a_plugin_that_fails_to_configure_is_a_plugin_error_at_construction():
     with pytest.raises(PluginError, match="failed to start: ValueError\\('this plug-in never starts'\\)"):
         PluginHost({"referencing": TESTING + "BrokenPlugin"}, {}, Recorder())
+    assert plugin_workers() == []
+
+
+def test_a_plugin_that_is_not_installed_is_a_plugin_error_naming_the_installed_ones():
+    with pytest.raises(PluginError, match="'no-such-vo' is not installed \\(installed: .*stereo-vo"):
+        PluginHost({"odometry": "no-such-vo"}, {}, Recorder())
     assert plugin_workers() == []
 
 
