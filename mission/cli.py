@@ -259,6 +259,51 @@ def _score(args: argparse.Namespace) -> int:
     return 0
 
 
+# -- `auv sim serve` (the simulator as a MAVLink vehicle) -------------------------------------------------------
+def _sim_serve(args: argparse.Namespace) -> int:
+    import signal
+    import threading
+
+    from mission.language import validate_mission_file
+    from mission.sim.serve import serve
+
+    mission, diags = validate_mission_file(args.mission)
+    if mission is None:
+        raise MissionError([d for d in diags if not d.warning])
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    seed = mission.seed if args.seed is None else args.seed
+    print(f"{mission.name}: serving the simulated vehicle on {', '.join(args.mavlink)} at {args.speedup:g}x "
+          f"(seed {seed})" + (f"; truth in {args.out}" if args.out else ""), flush=True)
+
+    def show(event: dict[str, Any]) -> None:
+        fields = " ".join(f"{k}={v}" for k, v in event.items() if k not in ("time", "event"))
+        print(f"  t={event['time']:9.1f} s  {event['event']} {fields}", flush=True)
+
+    summary = serve(mission, args.mavlink, seed=seed, speedup=args.speedup, out=args.out, stop_event=stop,
+                    on_event=None if args.quiet else show)
+    print(f"stopped: {summary.sim_time:.1f} s of vehicle time in {summary.wall_time:.1f} s "
+          f"({summary.steps} steps)", flush=True)
+    return 0
+
+
+def _add_sim_parser(sub: Any) -> None:
+    p = sub.add_parser("sim", help="the simulator behind a vehicle protocol")
+    ssub = p.add_subparsers(dest="sim_command", required=True)
+    p = ssub.add_parser("serve", help="serve the simulated vehicle as an ArduSub autopilot over MAVLink")
+    p.add_argument("mission", help="mission YAML file (its world, vehicle, sensors and seed)")
+    p.add_argument("--mavlink", action="append", required=True, metavar="ADDRESS",
+                   help="pymavlink connection string, e.g. udpout:127.0.0.1:14550 (repeat for more links)")
+    p.add_argument("--speedup", type=float, default=1.0, help="vehicle seconds per wall second (default 1)")
+    p.add_argument("--seed", type=int, help="random seed (default: the mission's)")
+    p.add_argument("--out", help="write the truth here as it goes (mission.yaml, world.yaml, trajectory.csv, "
+                   "usbl.csv, autopilot.jsonl)")
+    p.add_argument("-q", "--quiet", action="store_true", help="do not print the autopilot's events")
+    p.set_defaults(func=_sim_serve)
+# -- end of `auv sim serve` ------------------------------------------------------------------------------------
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="auv", description="Plan, simulate and execute AUV inspection missions.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -346,6 +391,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="model file (default: RUN/models/OBJECT.yaml)")
     p.add_argument("--extend", help="extend this existing model with the run's views instead")
     p.set_defaults(func=_model_build)
+    _add_sim_parser(sub)
     return parser
 
 
