@@ -21,7 +21,7 @@ test: $(STAMP)
 
 lint: $(STAMP)
 	$(BIN)/ruff check mission planners perception_plugins tests
-	$(BIN)/mypy mission planners perception_plugins
+	$(BIN)/mypy
 
 clean:
 	rm -rf $(VENV) runs .pytest_cache .mypy_cache .ruff_cache

@@ -29,7 +29,7 @@ def rotation_zyx(heading_deg: float, pitch_deg: float = 0.0, roll_deg: float = 0
     rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
     ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
     rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
-    return rz @ ry @ rx
+    return np.asarray(rz @ ry @ rx, dtype=float)
 
 
 def pose_matrix(

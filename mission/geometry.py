@@ -22,11 +22,24 @@ Array = NDArray[np.float64]
 
 
 def invert(T_a_b: Array) -> Array:
-    """T_b_a of a rigid T_a_b."""
-    T = np.eye(4)
-    R = T_a_b[:3, :3]
-    T[:3, :3] = R.T
-    T[:3, 3] = -R.T @ T_a_b[:3, 3]
+    """T_b_a of a rigid T_a_b, or of each of a stack (..., 4, 4) of them.
+
+    >>> T = np.eye(4); T[:3, 3] = [1.0, 2.0, 3.0]
+    >>> (invert(np.stack([T, np.eye(4)]))[:, :3, 3] + 0.0).tolist()
+    [[-1.0, -2.0, -3.0], [0.0, 0.0, 0.0]]
+    """
+    T_a_b = np.asarray(T_a_b, dtype=float)
+    if T_a_b.ndim == 2:
+        T = np.eye(4)
+        R = T_a_b[:3, :3]
+        T[:3, :3] = R.T
+        T[:3, 3] = -R.T @ T_a_b[:3, 3]
+        return T
+    R_b_a = np.swapaxes(T_a_b[..., :3, :3], -1, -2)
+    T = np.zeros_like(T_a_b)
+    T[..., :3, :3] = R_b_a
+    T[..., :3, 3] = -np.einsum("...ij,...j->...i", R_b_a, T_a_b[..., :3, 3])
+    T[..., 3, 3] = 1.0
     return T
 
 

@@ -1,110 +1,155 @@
-"""The executive's side of perception plug-ins: load them by name, configure them once, and contain their
-faults. An exception or a call over the time budget becomes a `plugin_fault` event and a "not recognised"
-result; the mission goes on per its policy.
+"""The executive's side of perception plug-ins: each configured plug-in runs in its own worker process, out of
+the control loop, and its faults are contained (issue 19, item 4).
+
+Agents hand frames over with `submit(role, frame, request, now)` and read the result with `PluginCall.poll(now)`;
+nothing the plug-in does (think for long, hang, raise, segfault) stalls the caller. Calls of one role are
+answered in submission order, each result tagged with its frame's time (`call.frame_time`). A fault (see
+`mission.plugin_calls`) gives the role's "no answer" result (`ReferencingResult.not_recognised`,
+`OdometryResult.lost`) and a `plugin_fault` event: `emit("plugin_fault", time, plugin=…, role=…, error=…,
+elapsed_ms=…, frame_time=…)`.
+
+Two clocks (`simulated_clock`):
+- onboard (`auv run`, the default): `now` is the vehicle's time; a result is ready as soon as it has arrived, and
+  `poll` never blocks. The budget is wall time, and a call still running at `budget_s` is abandoned and its
+  worker restarted (the hard timeout is the budget).
+- simulation (`auv simulate`): the simulator is paused while code thinks, so a call's latency is charged to the
+  simulated clock (the worker's CPU time, rounded up to `quantum_s`, default 10 ms). `poll(now)` is None before
+  the call can be ready, and when `now` may have reached its ready time it blocks until the worker has answered
+  (at most the hard timeout). The budget is the worker's CPU time; the hard timeout, wall time, is
+  `max(3 × budget_s, 30 s)` so that a loaded CI machine never kills a healthy call.
+
+`process` (synchronous: submit and wait for the answer) serves tools and benches. `reset()` is queued behind the
+calls already submitted; `close()` asks each worker to close its plug-in and exit, and kills it after
+`close_timeout_s`.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from mission.errors import PluginError
-from mission.plugin_api import OdometryResult, PerceptionPlugin, ReferencingResult, StereoImages
-from mission.plugins import load_plugin
+from mission.plugin_api import StereoImages
+from mission.plugin_calls import PluginCall, RoleWorker, Timing, no_answer
 
 DEFAULT_BUDGET_S = 5.0  # per call; generous for a software renderer's machine, tight enough to catch a hang
+SIMULATED_HARD_TIMEOUT_S = 30.0  # simulation's hard (wall) timeout is at least this, and 3 × the budget
 
 
 class PluginHost:
-    """Plug-in instances by role (`referencing`, `odometry`), each call timed and guarded."""
+    """Plug-in workers by role (`referencing`, `odometry`), each call timed and guarded."""
 
     def __init__(self, roles: Mapping[str, str | None], settings: Mapping[str, Any], emit: Callable[..., None],
-                 budget_s: float = DEFAULT_BUDGET_S, clock: Callable[[], float] = time.perf_counter):
-        """`clock` times each call against `budget_s`: wall time onboard; the simulator passes the calling
-        thread's CPU time (`time.thread_time`), the simulated onboard computer's, so that a loaded machine
-        does not turn a normal call into a fault and change the run."""
+                 budget_s: float = DEFAULT_BUDGET_S, simulated_clock: bool = False,
+                 hard_timeout_s: float | None = None, quantum_s: float = 0.01, start_timeout_s: float = 60.0,
+                 close_timeout_s: float = 5.0):
+        """Start and configure a worker per named plug-in (in parallel); a plug-in that fails to load or to
+        configure raises PluginError here, after the other workers have been stopped."""
         self.emit = emit
         self.budget_s = budget_s
-        self.clock = clock
-        self.plugins: dict[str, PerceptionPlugin] = {}
+        if hard_timeout_s is None:
+            hard_timeout_s = max(3.0 * budget_s, SIMULATED_HARD_TIMEOUT_S) if simulated_clock else budget_s
+        self.timing = Timing(simulated_clock, budget_s, hard_timeout_s, quantum_s, start_timeout_s)
+        self.close_timeout_s = close_timeout_s
         self.names: dict[str, str] = {}
-        for role, name in roles.items():
-            if name is None:
-                continue
-            factory = load_plugin(name)
-            try:
-                instance = factory()
-                instance.configure(settings)
-            except Exception as exc:
-                raise PluginError(f"perception plug-in '{name}' ({role}) failed to start: {exc!r}") from exc
-            if not isinstance(instance, PerceptionPlugin):
-                raise PluginError(f"perception plug-in '{name}' does not implement configure/process/reset/close")
-            self.plugins[role] = instance
-            self.names[role] = name
-        self.calls: list[dict[str, Any]] = []
+        self.workers: dict[str, RoleWorker] = {}
+        self.now = -math.inf  # the latest vehicle time the host was given
+        self.closed = False
+        try:
+            for role, name in roles.items():
+                if name is not None:
+                    self.workers[role] = RoleWorker(role, name, settings, self.timing)
+                    self.names[role] = name
+            deadline = time.monotonic() + start_timeout_s
+            for worker in self.workers.values():
+                worker.wait_ready(deadline)
+        except BaseException:
+            self.close()
+            raise
+
+    @property
+    def simulated_clock(self) -> bool:
+        return self.timing.simulated
 
     def has(self, role: str) -> bool:
-        return role in self.plugins
-
-    def process(self, role: str, frame: StereoImages, request: Any, now: float) -> Any:
-        """Call a plug-in; on a fault or an overrun, log it and return a "not recognised" result."""
-        plugin = self.plugins.get(role)
-        if plugin is None:
-            return _failed(role, f"no '{role}' plug-in configured")
-        t0 = self.clock()
-        try:
-            result = plugin.process(frame, request)
-        except Exception as exc:
-            elapsed = self.clock() - t0
-            self.emit("plugin_fault", now, plugin=self.names[role], role=role, error=repr(exc),
-                      elapsed_ms=1e3 * elapsed)
-            return _failed(role, f"plug-in fault: {exc!r}", elapsed_ms=1e3 * elapsed)
-        elapsed = self.clock() - t0
-        if elapsed > self.budget_s:
-            self.emit("plugin_fault", now, plugin=self.names[role], role=role,
-                      error=f"over its time budget ({1e3 * elapsed:.0f} ms > {1e3 * self.budget_s:.0f} ms)",
-                      elapsed_ms=1e3 * elapsed)
-            return _failed(role, "over the time budget", elapsed_ms=1e3 * elapsed)
-        return result
+        return role in self.workers
 
     def submit(self, role: str, frame: StereoImages, request: Any, now: float) -> PluginCall:
         """Hand a frame to a plug-in without waiting for it; `PluginCall.poll(now)` gives the result once it is
-        ready (tagged with `frame.time`: the agent uses it at that time, with the navigation estimate then).
+        ready (tagged with `frame.time`: the agent uses it at that time, with the navigation estimate then)."""
+        self._advance(now)
+        call = PluginCall(role, frame.time)
+        call.submitted_at = now
+        worker = self.workers.get(role)
+        if worker is None or self.closed:
+            why = f"no '{role}' plug-in configured" if worker is None else "the plug-in host was closed"
+            call.resolve(no_answer(role, why), now)
+            return call
+        call._waiter = self._poll
+        worker.submit(call, frame, request)
+        self._pump_all()
+        return call
 
-        A fault or an overrun gives the role's "no answer" result, as `process` does."""
-        return PluginCall(role, frame.time, self.process(role, frame, request, now), ready_at=now)
+    def process(self, role: str, frame: StereoImages, request: Any, now: float) -> Any:
+        """Call a plug-in and wait for its answer (at most the hard timeout); a fault gives "no answer"."""
+        call = self.submit(role, frame, request, now)
+        worker = self.workers.get(role)
+        while worker is not None and not call.answered:
+            worker.pump(self._wait_s(worker))
+        self._flush(math.inf if self.simulated_clock else now)
+        return call._result
+
+    def _poll(self, call: PluginCall, now: float) -> Any | None:
+        self._advance(now)
+        self._pump_all()
+        worker = self.workers.get(call.role)
+        if self.simulated_clock and worker is not None:
+            while not call.answered and now >= worker.lower_bound(call):
+                worker.pump(self._wait_s(worker))  # the simulator waits: the onboard computer would be thinking
+        self._flush(now)
+        return call._result if call.answered and now >= call.ready_at else None
 
     def reset(self) -> None:
-        for role, plugin in self.plugins.items():
-            try:
-                plugin.reset()
-            except Exception as exc:
-                self.emit("plugin_fault", 0.0, plugin=self.names[role], role=role, error=repr(exc))
+        """Between route elements: each plug-in drops its per-element state (queued behind submitted calls)."""
+        for worker in self.workers.values():
+            worker.reset()
+        self._pump_all()
 
     def close(self) -> None:
-        for role, plugin in self.plugins.items():
-            try:
-                plugin.close()
-            except Exception as exc:
-                self.emit("plugin_fault", 0.0, plugin=self.names[role], role=role, error=repr(exc))
+        """Close every plug-in and stop its worker (killing it after `close_timeout_s`); idempotent."""
+        if self.closed:
+            return
+        self.closed = True
+        deadline = time.monotonic() + self.close_timeout_s
+        for worker in self.workers.values():
+            worker.close(deadline)
+        self._flush(math.inf)
 
+    def _advance(self, now: float) -> None:
+        self.now = max(self.now, now)
 
-class PluginCall:
-    """A plug-in call under way. `poll(now)` is None until the result is ready at the vehicle's time `now`."""
+    def _wait_s(self, worker: RoleWorker) -> float:
+        return min(0.5, max(0.0, worker.next_deadline() - time.monotonic()) + 0.01)
 
-    def __init__(self, role: str, frame_time: float, result: Any = None, ready_at: float = float("inf")):
-        self.role = role
-        self.frame_time = frame_time
-        self._result = result
-        self._ready_at = ready_at
+    def _pump_all(self) -> None:
+        if self.closed:
+            return
+        for worker in self.workers.values():
+            worker.pump()
+        self._flush(self.now)
 
-    def poll(self, now: float) -> Any | None:
-        return self._result if now >= self._ready_at else None
-
-
-def _failed(role: str, reason: str, **details: Any) -> ReferencingResult | OdometryResult:
-    """The "no answer" result of a role: lost tracking for odometry, "not recognised" otherwise."""
-    if role == "odometry":
-        return OdometryResult.lost(reason, **details)
-    return ReferencingResult.not_recognised(reason, **details)
+    def _flush(self, until: float) -> None:
+        """Emit the faults noticed so far: onboard at once (at the latest vehicle time); in simulation those due
+        by `until`, at their simulated time."""
+        due = []
+        for worker in self.workers.values():
+            keep = []
+            for fault in worker.faults:
+                if fault.due is None or fault.due <= until:
+                    due.append((self.now if fault.due is None else fault.due, fault.fields))
+                else:
+                    keep.append(fault)
+            worker.faults = keep
+        for t, fields in sorted(due, key=lambda f: f[0]):
+            self.emit("plugin_fault", t if math.isfinite(t) else 0.0, **fields)

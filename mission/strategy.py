@@ -1,6 +1,12 @@
 """The strategic level's ordering (seed 002 §3.4): when a route inspects several known objects one after another,
 visit them in the order that makes the shortest path from where the vehicle is (an open travelling-salesman
-path over the objects' database positions); each object's own sets and targets are ordered by its agent."""
+path over the objects' database positions); each object's own sets and targets are ordered by its agent.
+
+The graph of objects is the complete graph of their positions, solved by `planners.ordering.solve_tsp` (exact up
+to 12 objects). Measured against networkx's Christofides (`benchmarks/networkx_timing.py`, the cycle from the
+vehicle less its return leg) on 4, 8, 12 and 20 objects: its paths were 10–18 % longer; its time was 0.06–5.1×
+ours over two runs on a loaded machine (all under 20 ms either way). Shorter paths decide: ours stays.
+"""
 
 from __future__ import annotations
 

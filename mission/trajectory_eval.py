@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from mission.errors import AuvError
+from mission.geometry import invert
 
 Array = NDArray[np.float64]
 
@@ -277,7 +278,7 @@ def evaluate(
     rpe = relative_pose_errors(Q, P, delta)
 
     path_length = float(np.linalg.norm(np.diff(Q[:, :3, 3], axis=0), axis=1).sum())
-    T_anchor = Q[0] @ _invert(P[0])
+    T_anchor = Q[0] @ invert(P[0])
     end_est = T_anchor[:3, :3] @ P[-1, :3, 3] + T_anchor[:3, 3]
     drift = float(np.linalg.norm(end_est - Q[-1, :3, 3]))
     return TrajectoryErrors(
@@ -298,9 +299,9 @@ def evaluate(
 def relative_pose_errors(gt_poses: Array, est_poses: Array, delta: int = 1) -> Array:
     """(N − delta, 2) translation (m) and rotation (deg) of E_i = (Q_i⁻¹Q_{i+δ})⁻¹(P_i⁻¹P_{i+δ})."""
     Q, P = gt_poses, est_poses
-    dQ = _invert_many(Q[:-delta]) @ Q[delta:]
-    dP = _invert_many(P[:-delta]) @ P[delta:]
-    E = _invert_many(dQ) @ dP
+    dQ = invert(Q[:-delta]) @ Q[delta:]
+    dP = invert(P[:-delta]) @ P[delta:]
+    E = invert(dQ) @ dP
     trans = np.linalg.norm(E[:, :3, 3], axis=1)
     # scipy's quaternion fit absorbs the rounding of stored rotations, as evo's (which uses it) does
     rot = np.degrees(Rotation.from_matrix(E[:, :3, :3]).magnitude())
@@ -314,22 +315,6 @@ def _as_poses(poses: ArrayLike, name: str) -> Array:
     if not np.all(np.isfinite(T)):
         raise TrajectoryError(f"{name}: poses contain non-finite numbers")
     return T
-
-
-def _invert(T: Array) -> Array:
-    out = np.eye(4)
-    out[:3, :3] = T[:3, :3].T
-    out[:3, 3] = -T[:3, :3].T @ T[:3, 3]
-    return out
-
-
-def _invert_many(T: Array) -> Array:
-    out = np.zeros_like(T)
-    Rt = np.transpose(T[:, :3, :3], (0, 2, 1))
-    out[:, :3, :3] = Rt
-    out[:, :3, 3] = -np.einsum("nij,nj->ni", Rt, T[:, :3, 3])
-    out[:, 3, 3] = 1.0
-    return out
 
 
 # ------------------------------------------------------------------------------------------------------- reports

@@ -1,5 +1,6 @@
 """Benchmarks behind `auv bench NAME [--quick]`: each runs its anchors and ours side by side in one process and
-writes `benchmarks/results/NAME.json` with `name`, `quick`, `machine`, `timestamp`, `results` and `checks`
+writes `benchmarks/results/NAME.json` (`NAME.quick.json` with `--quick`, beside the full results and never over
+them) with `name`, `quick`, `machine`, `timestamp`, `results` and `checks`
 (one entry per goal the issue states: `{"value", "target", "pass"}`), computed from this run's measurements.
 """
 
@@ -54,8 +55,17 @@ def machine() -> dict[str, Any]:
     return {"cpu": cpu, "cores": os.cpu_count(), "python": sys.version.split()[0], "platform": platform.platform()}
 
 
+def results_path(name: str, quick: bool, out_dir: Path | None = None) -> Path:
+    """Where a benchmark's record goes: `NAME.json` for a full run, `NAME.quick.json` for a quick one.
+
+    >>> results_path("vo", True, Path("r")).as_posix(), results_path("vo", False, Path("r")).as_posix()
+    ('r/vo.quick.json', 'r/vo.json')
+    """
+    return (out_dir or REPO / "benchmarks" / "results") / f"{name}{'.quick' if quick else ''}.json"
+
+
 def run_benchmark(name: str, quick: bool = False, out_dir: Path | None = None) -> dict[str, Any]:
-    """Run one benchmark and write its JSON; returns the record."""
+    """Run one benchmark and write its JSON (`results_path`); returns the record."""
     if name not in BENCHMARKS:
         raise AuvError(f"unknown benchmark '{name}' (available: {', '.join(sorted(BENCHMARKS))})")
     module = importlib.import_module(BENCHMARKS[name])
@@ -63,7 +73,7 @@ def run_benchmark(name: str, quick: bool = False, out_dir: Path | None = None) -
     record = {"name": name, "quick": quick, "machine": machine(),
               "timestamp": datetime.now(UTC).isoformat(timespec="seconds"),
               "results": results, "checks": checks}
-    out_dir = out_dir or REPO / "benchmarks" / "results"
-    out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / f"{name}.json").write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
+    path = results_path(name, quick, out_dir)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
     return record

@@ -247,7 +247,7 @@ def octomap_occupied(tree: Any, pings: list[tuple[Array, Array]], resolution: fl
     k = candidates.copy()
     unpacked = np.stack([(k >> 42) & 0x1FFFFF, (k >> 21) & 0x1FFFFF, k & 0x1FFFFF], axis=1) - (1 << 20)
     labels = tree.getLabels((unpacked + 0.5) * resolution)
-    return unpacked[np.asarray(labels) == 1]
+    return np.asarray(unpacked[np.asarray(labels) == 1], dtype=np.int64)
 
 
 def run(quick: bool) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:

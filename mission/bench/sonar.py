@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from mission.bench import REPO, check
 from mission.frames import Array, invert, rotation_zyx
-from mission.world.model import Box
+from mission.language.world import Box
 from mission.world.scene import Scene
 
 BEAMS = 512

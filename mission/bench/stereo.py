@@ -69,7 +69,7 @@ def _middlebury(quick: bool) -> dict[str, Any]:
 
     from perception_plugins.stereo import RectifiedStereo, stereo_cloud
 
-    left, right, disparity = skimage.data.stereo_motorcycle()
+    left, right, disparity = skimage.data.stereo_motorcycle()  # type: ignore[no-untyped-call,unused-ignore]
     grey_l, grey_r = (cv2.cvtColor(im, cv2.COLOR_RGB2GRAY) for im in (left, right))
     m = MIDDLEBURY
     geometry = RectifiedStereo(m["f"], m["f"], m["cx"], m["cy"], m["baseline_m"], (left.shape[1], left.shape[0]),

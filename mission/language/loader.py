@@ -13,8 +13,8 @@ from mission.language.checks import Parts, cross_check
 from mission.language.models import Home, KnownObject, Mission, Plugins, RouteElement, Safety, Sensors
 from mission.language.source import Located, read_yaml
 from mission.language.validation import validate_as
+from mission.language.world import World
 from mission.plugins import describe_installed, installed_plugins
-from mission.world.model import World
 
 
 def _mapping_document(doc: Located, what: str) -> list[Diagnostic]:

@@ -42,7 +42,10 @@ class Home(Strict):
     heading: float = 0.0
 
 
-class Vehicle(Strict):
+class VehicleSettings(Strict):
+    """The mission's `vehicle:` section: the limits and energy of the vehicle (the vehicle itself, simulated or
+    real, is `mission.vehicle.VehicleInterface`)."""
+
     max_speed: Positive = 2.0
     cruise_speed: Positive = 1.5
     max_acceleration: Positive = 0.2
@@ -60,6 +63,9 @@ class Vehicle(Strict):
         if top is not None and value > top:
             raise ValueError(f"cruise_speed {value:g} exceeds max_speed {top:g}")
         return value
+
+
+Vehicle = VehicleSettings  # the same model under its short name (`Mission.vehicle`)
 
 
 class Mbes(Strict):
@@ -287,7 +293,7 @@ class Mission(Strict):
     world: str | None = None
     seed: int = 0
     home: Home = Home()
-    vehicle: Vehicle = Vehicle()
+    vehicle: VehicleSettings = VehicleSettings()
     sensors: Sensors = Sensors()
     plugins: Plugins = Plugins()
     safety: Safety = Safety()

@@ -72,7 +72,7 @@ def _build(doc: Located, node: yaml.Node, path: PathKey) -> Any:
         return out
     if isinstance(node, yaml.SequenceNode):
         return [_build(doc, item, path + (i,)) for i, item in enumerate(node.value)]
-    return _SCALARS.construct_object(node)  # type: ignore[no-untyped-call]
+    return _SCALARS.construct_object(node)
 
 
 def _syntax_diagnostic(exc: yaml.MarkedYAMLError, file: str) -> Diagnostic:

@@ -48,8 +48,9 @@ from scipy.ndimage import gaussian_filter
 from mission.errors import AuvError
 from mission.frames import R_BODY_CAM, Array, camera_pose
 from mission.language.models import Stereo
-from mission.sim.mjworld import HIDDEN_GROUP, R_MJ_NED, SEABED_TILE_GROUP, VISUAL_GROUP, Appearance, MjWorld, ned_to_mj
-from mission.world.model import Texture, World
+from mission.language.world import Texture, World
+from mission.sim.mjworld import HIDDEN_GROUP, R_MJ_NED, SEABED_TILE_GROUP, VISUAL_GROUP, MjWorld, ned_to_mj
+from mission.sim.textures import Appearance
 from mission.world.scene import Scene, build_scene
 
 
@@ -147,7 +148,7 @@ def _gl_context(width: int, height: int) -> Any:
             if backend == "egl":
                 from mujoco.egl import GLContext
             else:
-                from mujoco.osmesa import GLContext  # type: ignore[no-redef]
+                from mujoco.osmesa import GLContext  # type: ignore[no-redef,unused-ignore]
             context = GLContext(width, height)
             context.make_current()
             return context

@@ -166,4 +166,5 @@ def run_campaign(mission_path: str | Path, seeds: Sequence[int], out: str | Path
                 finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                 for f in finished:
                     record(f.result())
-    return json.loads(report_path.read_text())
+    report: dict[str, Any] = json.loads(report_path.read_text())
+    return report

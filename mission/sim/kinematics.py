@@ -8,7 +8,7 @@ import math
 from dataclasses import dataclass
 
 from mission.frames import wrap_deg
-from mission.language.models import Vehicle
+from mission.language.models import VehicleSettings
 
 YAW_GAIN = 1.0  # (deg/s) per deg of heading error
 DEPTH_GAIN = 0.4  # (m/s) per m of depth error
@@ -28,7 +28,7 @@ class TrueState:
 
 
 def step(state: TrueState, heading_cmd: float, speed_cmd: float, depth_cmd: float, heading_meas: float,
-         depth_meas: float, limits: Vehicle, current: tuple[float, float], dt: float,
+         depth_meas: float, limits: VehicleSettings, current: tuple[float, float], dt: float,
          hover_velocity: tuple[float, float] | None = None) -> None:
     """Advance the true state by dt towards the setpoints; the autopilot closes its loops on measurements.
 

@@ -1,7 +1,7 @@
 """The world as a MuJoCo model: one static model per scene that the sonar ray-casts and the cameras render.
 
 Seed 002 §2.1 surveys the seabed with a multibeam echo-sounder whose beams are "ray-cast against the world"; the
-stereo cameras of a later issue render the same world. Both go through this module: the seabed height field
+stereo cameras render the same world. Both go through this module: the seabed height field
 becomes an `hfield` geom and every object part a box or cylinder geom, all static in the worldbody.
 
 Frames. Our world is local NED (north, east, down = depth). MuJoCo is right-handed and z-up, so the model is
@@ -25,33 +25,25 @@ grid nodes the surface is piecewise planar where `HeightField.depth_at` is bilin
 Geom groups: the seabed is in `SEABED_GROUP`, objects in `OBJECT_GROUP`, so a ray cast can ignore either. Object
 geoms are named `"<object id>/<part index>"`; `MjWorld.object_of_geom` attributes a hit to its object.
 
-Appearance (for cameras, `MjWorld(scene, appearance=Appearance(...))`): the seabed gets a seeded procedural texture
-by `texture.kind` (multi-octave noise, sand ripples, gravel, mud, rock) and every object part a textured twin in
-`VISUAL_GROUP`: a mesh of the same shape whose texture coordinates run in metres, so one grey noise texture
-(paint, fouling blobs, specks) modulates each part's colour at the same scale on every face — flat faces get
-corners and blobs a feature matcher can hold on to. The seabed is repeated as square hfield tiles in
-`SEABED_TILE_GROUP` (the same grid nodes; the last row and column of tiles run past the world's edge, flat) so that a
-camera renders the few tiles in view, not hundreds of thousands of triangles; each tile spans a whole number of
-texture periods, so the texture runs on without seams. Rays only see groups 0 and 1; cameras show groups 2 and 3.
-Without an appearance the model is exactly the plain one the sonar uses.
+Appearance (for cameras, `MjWorld(scene, appearance=Appearance(...))`): see `mission.sim.textures` for the
+textures and `mission.sim.meshes` for the textured twins of the parts.
 
 An `MjData` is not thread-safe: give each thread its own `MjWorld` (or its own `mujoco.MjData`).
 """
 
 from __future__ import annotations
 
-import math
 from collections import OrderedDict
-from dataclasses import dataclass, field
 from typing import Any
 
 import mujoco
 import numpy as np
-import scipy.fft
 from numpy.typing import NDArray
 
 from mission.frames import Array, rotation_zyx
-from mission.world.model import Box, Cylinder, Part, Texture
+from mission.language.world import Box, Cylinder, Part
+from mission.sim.meshes import box_mesh, cylinder_mesh
+from mission.sim.textures import Appearance, object_albedo, seabed_albedo, to_bytes
 from mission.world.scene import PlacedObject, Scene
 from mission.world.terrain import HeightField
 
@@ -151,202 +143,15 @@ def _hfield_layout(field: HeightField) -> tuple[Array, Array, NDArray[np.float32
     return pos, size, data
 
 
-@dataclass(frozen=True)
-class Appearance:
-    """How the world looks to cameras: procedural textures for the seabed and the object parts.
-
-    The seabed texture tiles every `seabed_tile_m` metres with `seabed_texels` texels a side (6 mm a texel by
-    default, about one pixel at 6 m range with fx = 1000); the objects share one grey texture tiling every
-    `object_tile_m` metres (4 mm a texel by default), multiplied by each part's colour.
-    """
-
-    seabed: Texture = field(default_factory=Texture)
-    seabed_tile_m: float = 12.0
-    """Texture period (m), rounded so that a whole number of periods spans a seabed tile."""
-    seabed_texels: int = 2048
-    object_tile_m: float = 4.0
-    object_texels: int = 1024
-    object_seed: int = 0
-    seabed_tile_span_m: float = 24.0
-    """Side of a seabed tile (m), rounded to whole grid cells."""
-
-    def tiling(self, resolution: float) -> tuple[int, int, float]:
-        """(grid cells per tile side, texture periods per tile side, texture period in metres) for a grid.
-
-        >>> Appearance().tiling(1.0)
-        (24, 2, 12.0)
-        """
-        cells = max(2, round(self.seabed_tile_span_m / resolution))
-        periods = max(1, round(cells * resolution / self.seabed_tile_m))
-        return cells, periods, cells * resolution / periods
-
-
-_SEABED_RGB: dict[str, tuple[float, float, float]] = {
-    "sand": (0.78, 0.72, 0.58), "mud": (0.55, 0.52, 0.45), "gravel": (0.66, 0.64, 0.60), "rock": (0.60, 0.60, 0.58),
-}
-
-
-def band_noise(rng: np.random.Generator, texels: int, tile_m: float, shortest_m: float, longest_m: float,
-               beta: float = 2.0) -> NDArray[np.float32]:
-    """Seamlessly tiling noise with wavelengths between `shortest_m` and `longest_m` (soft band edges) and a power
-    spectrum falling as f^−beta (2 for natural surfaces, 0 for white); zero mean, unit standard deviation.
-
-    >>> n = band_noise(np.random.default_rng(0), 64, 1.0, 0.05, 0.5)
-    >>> n.shape, abs(float(n.mean())) < 1e-6, round(float(n.std()), 4)
-    ((64, 64), True, 1.0)
-    """
-    spectrum = scipy.fft.rfft2(rng.standard_normal((texels, texels), dtype=np.float32))
-    fy = (np.fft.fftfreq(texels) * (texels / tile_m)).astype(np.float32)  # cycles per metre
-    fx = (np.fft.rfftfreq(texels) * (texels / tile_m)).astype(np.float32)
-    f2 = fy[:, None] ** 2 + fx[None, :] ** 2
-    f2[0, 0] = 1.0
-    gain = f2 ** np.float32(-0.25 * beta) * np.exp(-f2 * np.float32(shortest_m**2))
-    gain *= -np.expm1(-f2 * np.float32(longest_m**2))
-    gain[0, 0] = 0.0
-    out = scipy.fft.irfft2(spectrum * gain, s=(texels, texels))
-    out -= out.mean()
-    std = out.std()
-    return np.asarray(out / std if std > 0 else out, dtype=np.float32)
-
-
-def _smoothstep(lo: float, hi: float, x: NDArray[np.float32]) -> NDArray[np.float32]:
-    t = np.clip((x - np.float32(lo)) * np.float32(1.0 / (hi - lo)), 0.0, 1.0)
-    return np.asarray(t * t * (3.0 - 2.0 * t), dtype=np.float32)
-
-
-def _ripples(rng: np.random.Generator, texels: int, tile_m: float, wavelength_m: float) -> NDArray[np.float32]:
-    """Sand ripples: asymmetric crests whose wave vector tiles exactly, bent and faded by low-frequency noise."""
-    angle = rng.uniform(0.0, math.pi)
-    k = np.round(tile_m / wavelength_m * np.array([math.cos(angle), math.sin(angle)]))
-    ramp = np.arange(texels, dtype=np.float32) * np.float32(2.0 * math.pi / texels)
-    phase = (np.float32(k[0]) * ramp[None, :] + np.float32(k[1]) * ramp[:, None]
-             + 2.5 * band_noise(rng, texels, tile_m, 0.5, 4.0))
-    crest = np.sin(phase + 0.7 * np.sin(phase))  # steeper lee side than stoss side
-    return np.asarray(crest * _smoothstep(-0.8, 0.8, band_noise(rng, texels, tile_m, 1.0, 6.0)), dtype=np.float32)
-
-
-def seabed_albedo(texture: Texture, texels: int = 2048, tile_m: float = 12.0) -> NDArray[np.float32]:
-    """(texels, texels, 3) seabed colour in [0, 1] for a `seabed.texture` spec; the same spec, the same texture.
-
-    Every kind has multi-octave noise from centimetres to metres (shading and blobs) and grain at a few texels
-    (corners for feature detectors); `scale` stretches all feature sizes.
-    """
-    rng = np.random.default_rng(texture.seed)
-    s = texture.scale
-
-    def noise(shortest: float, longest: float, beta: float = 2.0) -> NDArray[np.float32]:
-        return band_noise(rng, texels, tile_m, shortest * s, longest * s, beta)
-
-    grain = noise(0.008, 0.03, 0.0)
-    specks = noise(0.015, 0.05, 1.0)
-    if texture.kind == "sand":
-        grey = 0.62 * (1.0 + 0.16 * noise(0.03, 3.0) + 0.12 * _ripples(rng, texels, tile_m, 0.12 * s)
-                       + 0.10 * grain)
-        grey += 0.30 * _smoothstep(2.0, 2.6, specks) - 0.25 * _smoothstep(2.2, 2.8, -specks)  # shell bits, pits
-    elif texture.kind == "gravel":
-        pebbles = _smoothstep(-0.1, 0.5, noise(0.025, 0.08, 2.0))
-        tone = 0.58 + 0.16 * noise(0.04, 0.15, 1.0)
-        grey = (1.0 - pebbles) * 0.42 * (1.0 + 0.12 * grain) + pebbles * tone
-        grey *= 1.0 + 0.12 * noise(0.2, 3.0)
-    elif texture.kind == "mud":
-        grey = 0.50 * (1.0 + 0.14 * noise(0.05, 4.0) + 0.07 * grain)
-        grey -= 0.22 * _smoothstep(2.1, 2.7, specks)  # burrows
-    else:  # rock
-        grey = 0.52 * (1.0 + 0.28 * noise(0.02, 4.0, 1.6) + 0.08 * grain)
-        grey *= 1.0 - 0.5 * np.exp(-((noise(0.05, 0.8) / 0.12) ** 2))  # cracks where a noise crosses zero
-    colour = np.asarray(_SEABED_RGB[texture.kind], dtype=np.float32) / np.float32(0.78)
-    return np.asarray(np.clip(np.clip(grey, 0.0, 1.0)[..., None] * colour, 0.0, 1.0), dtype=np.float32)
-
-
-def object_albedo(seed: int = 0, texels: int = 1024, tile_m: float = 4.0) -> NDArray[np.float32]:
-    """(texels, texels) grey in [0, 1] that modulates part colours: paint shading, light fouling, specks.
-
-    Painted steel stays mostly uniform: the object's geometric corners, not its stains, must be the strongest
-    Harris corners in a picture (seed 002 §3.1 chooses characteristic points that a Harris detector extracts well),
-    while the weak texture still gives dense matchers something to hold on to."""
-    rng = np.random.default_rng(seed)
-    grey = 0.85 * (1.0 + 0.06 * band_noise(rng, texels, tile_m, 0.02, 1.0) + 0.04
-                   * band_noise(rng, texels, tile_m, 0.006, 0.02, 0.0))
-    grey *= 1.0 - 0.12 * _smoothstep(0.8, 1.6, band_noise(rng, texels, tile_m, 0.03, 0.3))  # fouling
-    specks = band_noise(rng, texels, tile_m, 0.008, 0.03, 0.0)
-    grey *= 1.0 - 0.12 * _smoothstep(2.2, 2.9, specks)
-    return np.asarray(np.clip(grey, 0.0, 1.0), dtype=np.float32)
-
-
-def _to_bytes(image: NDArray[np.floating[Any]]) -> NDArray[np.uint8]:
-    return np.asarray(np.clip(np.rint(255.0 * image), 0, 255), dtype=np.uint8)
-
-
-MESH_CELL_M = 0.25
-"""Largest cell of the visual meshes: MuJoCo lights per vertex, so big faces are cut up for the lamp's cone and
-fall-off to vary across them."""
-
-Mesh = tuple[Array, Array, Array, NDArray[np.int_]]
-"""Vertices, normals, texture coordinates (metres) and triangles (counter-clockwise seen from outside)."""
-
-
-def _grid_faces(start: int, n_b: int, n_c: int) -> list[tuple[int, int, int]]:
-    """Two triangles per cell of an (n_b + 1) × (n_c + 1) vertex grid stored c-major, counter-clockwise when
-    the grid's b × c points outwards."""
-    faces = []
-    for j in range(n_c):
-        for i in range(n_b):
-            a, b = start + j * (n_b + 1) + i, start + j * (n_b + 1) + i + 1
-            c, d = b + n_b + 1, a + n_b + 1
-            faces += [(a, b, c), (a, c, d)]
-    return faces
-
-
-def _box_mesh(half: Array, offset: Array, cell: float = MESH_CELL_M) -> Mesh:
-    """A box as six gridded faces; texture coordinates run in metres, shifted per face by `offset`."""
-    verts: list[Array] = []
-    normals: list[Array] = []
-    uvs: list[Array] = []
-    faces: list[tuple[int, int, int]] = []
-    for a in range(3):
-        for sign in (1.0, -1.0):
-            b, c = ((a + 1) % 3, (a + 2) % 3) if sign > 0 else ((a + 2) % 3, (a + 1) % 3)  # b × c = outward
-            n_b, n_c = (max(1, math.ceil(2.0 * half[k] / cell)) for k in (b, c))
-            sb, sc = np.meshgrid(np.linspace(-half[b], half[b], n_b + 1), np.linspace(-half[c], half[c], n_c + 1))
-            v = np.zeros((sb.size, 3))
-            v[:, a], v[:, b], v[:, c] = sign * half[a], sb.ravel(), sc.ravel()
-            faces += _grid_faces(sum(len(x) for x in verts), n_b, n_c)
-            verts.append(v)
-            normals.append(np.tile(sign * np.eye(3)[a], (len(v), 1)))
-            uvs.append(v[:, [b, c]] + offset[2 * a + (sign < 0)])
-    return np.vstack(verts), np.vstack(normals), np.vstack(uvs), np.array(faces)
-
-
-def _cylinder_mesh(radius: float, half: float, offset: Array, segments: int = 48, cell: float = MESH_CELL_M) -> Mesh:
-    """A cylinder along local z: a gridded side whose u is arc length (seam duplicated) and two flat caps."""
-    theta = np.linspace(0.0, 2.0 * math.pi, segments + 1)
-    ring = np.stack([radius * np.cos(theta), radius * np.sin(theta)], axis=1)
-    m, n_z = segments + 1, max(1, math.ceil(2.0 * half / cell))
-    z = np.repeat(np.linspace(-half, half, n_z + 1), m)
-    verts = [np.column_stack([np.tile(ring, (n_z + 1, 1)), z])]
-    normals = [np.tile(np.column_stack([np.cos(theta), np.sin(theta), np.zeros(m)]), (n_z + 1, 1))]
-    uvs = [np.column_stack([np.tile(radius * theta, n_z + 1), z]) + offset[0]]
-    faces = _grid_faces(0, segments, n_z)
-    for k, zc in enumerate((-half, half)):  # caps: a centre and their own ring, normals along ±z
-        c0 = sum(len(x) for x in verts)
-        verts.append(np.vstack([[0.0, 0.0, zc], np.column_stack([ring[:-1], np.full(segments, zc)])]))
-        normals.append(np.tile([0.0, 0.0, 1.0 if zc > 0 else -1.0], (segments + 1, 1)))
-        uvs.append(np.vstack([[0.0, 0.0], ring[:-1]]) + offset[1 + k])
-        for i in range(segments):
-            j = (i + 1) % segments
-            faces.append((c0, c0 + 1 + i, c0 + 1 + j) if zc > 0 else (c0, c0 + 1 + j, c0 + 1 + i))
-    return np.vstack(verts), np.vstack(normals), np.vstack(uvs), np.array(faces)
-
-
 def _visual_xml(obj: PlacedObject, index: int, part: Part, tile_m: float, rng: np.random.Generator
                 ) -> tuple[str, str]:
     """(asset XML, worldbody XML) of a part's textured twin: a mesh with the primitive's shape, pose and colour."""
     name = f"vis/{obj.id}/{index}"
     offset = rng.uniform(0.0, tile_m, size=(6, 2))  # so that faces of equal size do not look alike
     if isinstance(part, Box):
-        verts, normals, uvs, faces = _box_mesh(0.5 * np.asarray(part.size, dtype=float), offset)
+        verts, normals, uvs, faces = box_mesh(0.5 * np.asarray(part.size, dtype=float), offset)
     else:
-        verts, normals, uvs, faces = _cylinder_mesh(part.radius, 0.5 * part.height, offset)
+        verts, normals, uvs, faces = cylinder_mesh(part.radius, 0.5 * part.height, offset)
     asset = (f'<mesh name="{name}" vertex="{_fmt(verts)}" normal="{_fmt(normals)}" '
              f'texcoord="{_fmt(uvs / tile_m)}" face="{" ".join(str(int(f)) for f in faces.ravel())}"/>\n    '
              f'<material name="{name}" texture="objects" rgba="{_fmt((*part.color, 1.0))}" specular="0.1" '
@@ -494,7 +299,7 @@ class MjWorld:
         tex = self.model.texture(name)
         adr, count = int(tex.adr[0]), int(tex.width[0] * tex.height[0] * tex.nchannel[0])
         assert rgb.size == count, (name, rgb.shape, count)
-        self.model.tex_data[adr:adr + count] = _to_bytes(rgb).ravel()
+        self.model.tex_data[adr:adr + count] = to_bytes(rgb).ravel()
 
     def group_mask(self, seabed: bool = True, objects: bool = True) -> NDArray[np.uint8]:
         """The `geomgroup` argument of MuJoCo's ray functions: 1 = the group is seen."""
@@ -542,5 +347,5 @@ def mjworld_for(scene: Scene) -> MjWorld:
 
 
 __all__ = ["Appearance", "HIDDEN_GROUP", "MjWorld", "OBJECT_GROUP", "R_MJ_NED", "R_NED_MJ", "SEABED_GROUP",
-           "SEABED_TILE_GROUP", "VISUAL_GROUP", "band_noise", "build_model_xml", "mj_dir_to_ned", "mj_to_ned",
-           "mjworld_for", "ned_dir_to_mj", "ned_to_mj", "object_albedo", "seabed_albedo", "seabed_tiles"]
+           "SEABED_TILE_GROUP", "VISUAL_GROUP", "build_model_xml", "mj_dir_to_ned", "mj_to_ned",
+           "mjworld_for", "ned_dir_to_mj", "ned_to_mj", "seabed_tiles"]

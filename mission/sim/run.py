@@ -78,15 +78,16 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
             bar.update(int(nav.time) - bar.n)
 
     wall0 = time.perf_counter()
+    host: PluginHost | None = None
     try:
-        host = PluginHost(mission.plugins.model_dump(), plugin_settings(mission), emit, clock=time.thread_time) \
+        host = PluginHost(mission.plugins.model_dump(), plugin_settings(mission), emit, simulated_clock=True) \
             if any(mission.plugins.model_dump().values()) else None
         from mission.artifacts import Artifacts
 
         report = Executive(mission, vehicle, emit, on_tick=tick, plugins=host, artifacts=Artifacts(out_dir)).run()
-        if host is not None:
-            host.close()
     finally:
+        if host is not None:
+            host.close()  # the workers go, whatever ended the run
         log.close()
         if recorder is not None:
             recorder.close()

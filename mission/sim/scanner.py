@@ -39,7 +39,7 @@ from mission.language.models import Scanner as ScannerSettings
 from mission.sim.mjworld import MjWorld
 from mission.world.scene import Scene
 from mission.world.terrain import HeightField
-from planners.nbv.views import Scanner as ViewModel
+from planners.nbv import Scanner as ViewModel
 
 DEFAULT_RAYS = (48, 36)
 """Rays across and up the frustum: 1.25° apart, 22 cm at 10 m."""

@@ -144,19 +144,16 @@ class StereoRecording:
 def read_stereo_recording(folder: str | Path) -> StereoRecording:
     """Read a folder written by `StereoRecorder`, checking that every file has one entry per frame."""
     root = Path(folder)
-    calib: dict[str, Array] = {}
+    from perception_plugins.vo import VoError, read_calibration
+
     try:
-        for lineno, line in enumerate((root / "calib.txt").read_text(encoding="utf-8").splitlines(), start=1):
-            key, _, values = line.partition(":")
-            numbers = np.array(values.split(), dtype=float)
-            if numbers.size != 12:
-                raise StereoRecordError(f"{root / 'calib.txt'}:{lineno}: expected 12 numbers after '{key}:'")
-            calib[key.strip()] = numbers.reshape(3, 4)
+        K, baseline = read_calibration(root / "calib.txt")
+    except VoError as e:
+        raise StereoRecordError(str(e)) from e
+    try:
         times = np.atleast_1d(np.loadtxt(root / "times.txt", ndmin=1))
     except (OSError, ValueError) as e:
         raise StereoRecordError(f"{root}: not a stereo recording: {e}") from e
-    if "P0" not in calib or "P1" not in calib:
-        raise StereoRecordError(f"{root / 'calib.txt'}: needs P0 and P1")
     lefts = tuple(sorted((root / "image_0").glob("*.png")))
     rights = tuple(sorted((root / "image_1").glob("*.png")))
     poses, nav = read_trajectory(root / "poses.txt").poses, read_trajectory(root / "nav.txt").poses
@@ -164,7 +161,5 @@ def read_stereo_recording(folder: str | Path) -> StereoRecording:
               "nav.txt": len(nav)}
     if len(set(counts.values())) != 1:
         raise StereoRecordError(f"{root}: files disagree on the number of frames: {counts}")
-    P0, P1 = calib["P0"], calib["P1"]
-    return StereoRecording(root, P0[:, :3].copy(), float((P0[0, 3] - P1[0, 3]) / P1[0, 0]), times, poses, nav,
-                           lefts, rights)
+    return StereoRecording(root, K, baseline, times, poses, nav, lefts, rights)
 

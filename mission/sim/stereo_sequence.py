@@ -19,9 +19,9 @@ from numpy.typing import NDArray
 
 from mission.frames import Array, camera_pose
 from mission.language.models import Stereo
+from mission.language.world import World
 from mission.plugin_api import StereoImages
 from mission.sim.camera import Degradations, StereoCamera, StereoFrame
-from mission.world.model import World
 from mission.world.scene import Scene, build_scene
 
 

@@ -12,7 +12,7 @@ import shapely
 from shapely.geometry import MultiPoint, Polygon
 
 from mission.frames import Array, pose_matrix, transform_points
-from mission.world.model import Box, Cylinder, Part, Texture, World, WorldObject
+from mission.language.world import Box, Cylinder, Part, Texture, World, WorldObject
 from mission.world.terrain import HeightField, generate_seabed
 
 
@@ -67,7 +67,7 @@ def _part_corners(part: Part) -> Array:
         local = np.array([[sx * length / 2, sy * w / 2, sz * h / 2] for sx, sy, sz in signs])
         c, s = math.cos(math.radians(part.heading)), math.sin(math.radians(part.heading))
         local = local @ np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]).T
-        return local + (cx, cy, cz)
+        return np.asarray(local + (cx, cy, cz), dtype=float)
     assert isinstance(part, Cylinder)
     angles = np.linspace(0.0, 2.0 * math.pi, 16, endpoint=False)
     ring = np.stack([part.radius * np.cos(angles), part.radius * np.sin(angles)], axis=1)

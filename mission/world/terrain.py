@@ -13,7 +13,7 @@ import numpy as np
 from scipy.ndimage import gaussian_filter
 
 from mission.frames import Array
-from mission.world.model import Seabed
+from mission.language.world import Seabed
 
 
 @dataclass(frozen=True)
@@ -27,11 +27,11 @@ class HeightField:
 
     @property
     def north_max(self) -> float:
-        return self.north0 + (self.depth.shape[0] - 1) * self.resolution
+        return float(self.north0 + (self.depth.shape[0] - 1) * self.resolution)
 
     @property
     def east_max(self) -> float:
-        return self.east0 + (self.depth.shape[1] - 1) * self.resolution
+        return float(self.east0 + (self.depth.shape[1] - 1) * self.resolution)
 
     def depth_at(self, north: float, east: float) -> float:
         """Bilinear depth at one point; outside the grid the nearest edge value is used."""

@@ -16,11 +16,12 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from mission.geometry import invert, transform_points
 from perception_plugins.multiview.corners import find_corners
 from perception_plugins.multiview.edits import Edits, ViewEdits
 from perception_plugins.multiview.errors import MultiviewError
 from perception_plugins.multiview.model import ObjectModel, ViewModel, merge_full_model
-from perception_plugins.multiview.object_frame import apply, invert, object_frame
+from perception_plugins.multiview.object_frame import object_frame
 from perception_plugins.multiview.patches import scan_row
 from perception_plugins.multiview.points import match_points
 from perception_plugins.multiview.segments import Segment, match_end_points, segment_from_disparities, stereo_segments
@@ -187,7 +188,7 @@ def build_model(object_id: str, views: list[ViewInput], edits: Edits | None = No
                                      np.asarray(v.T_world_cam_nav, float), T_object_view[i], pts, uv, desc, segs,
                                      find_corners(segs)))
     model = ObjectModel(object_id, view_models, settings.detector,
-                        apply(T_object_view[base_index], base.points))
+                        transform_points(T_object_view[base_index], base.points))
     merge_full_model(model, links, settings.merge_tol)
     if T_world_database is not None:
         model.T_database_object = (invert(np.asarray(T_world_database, float)) @ base_view.T_world_cam_nav

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from mission.geometry import invert, transform_points
 from perception_plugins.multiview.corners import corner_points
 from perception_plugins.multiview.model import ViewModel
-from perception_plugins.multiview.object_frame import apply, invert
 from perception_plugins.multiview.patches import sample, scan_row, search_2d, side_grid, texture
 from perception_plugins.stereo.camera import RectifiedStereo, backproject, project
 
@@ -59,12 +59,12 @@ def _recognise_end(view: ViewModel, seg_index: int, end: int, T_work_view: Array
     if texture(ref) < 2.0:
         return None
     z = float(seg.points[end, 2])
-    grid_w = project(geo.K, apply(T_work_view, backproject(view.K, grid_m, np.full(len(grid_m), z))))
+    grid_w = project(geo.K, transform_points(T_work_view, backproject(view.K, grid_m, np.full(len(grid_m), z))))
     shift, score, ok = search_2d(ref, work_left, grid_w, settings.radius_px, settings.min_score)
     if not ok:
         return None
     grid_w = grid_w + shift
-    predicted = apply(T_work_view, seg.points[end:end + 1])[0]
+    predicted = transform_points(T_work_view, seg.points[end:end + 1])[0]
     uv = project(geo.K, predicted[None])[0] + shift
     d_pred = float(geo.disparity(predicted[2]))
     peak = scan_row(work_left, work_right, grid_w, d_pred - settings.disparity_window,

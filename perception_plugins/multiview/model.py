@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from mission.geometry import transform_points
 from perception_plugins.multiview.corners import Corner, corner_points
-from perception_plugins.multiview.object_frame import apply
 from perception_plugins.multiview.segments import Segment
 
 Array = NDArray[np.float64]
@@ -96,7 +96,7 @@ def merge_full_model(model: ObjectModel, point_links: list[tuple[int, int, int, 
             i = int(parent[i])
         return i
 
-    obj = [apply(v.T_object_view, v.points) for v in views]
+    obj = [transform_points(v.T_object_view, v.points) for v in views]
     for va, ia, vb, ib in point_links:
         a, b = find(int(offsets[va] + ia)), find(int(offsets[vb] + ib))
         if a != b and np.linalg.norm(obj[va][ia] - obj[vb][ib]) <= 2 * tol_m:
@@ -113,7 +113,7 @@ def merge_full_model(model: ObjectModel, point_links: list[tuple[int, int, int, 
     groups: list[list[Array]] = []
     for v in views:
         ids_v = []
-        for seg in apply(v.T_object_view, v.segment_points().reshape(-1, 3)).reshape(-1, 2, 3):
+        for seg in transform_points(v.T_object_view, v.segment_points().reshape(-1, 3)).reshape(-1, 2, 3):
             g = _find_segment(groups, seg, tol_m)
             if g is None:
                 groups.append([seg])
@@ -128,7 +128,7 @@ def merge_full_model(model: ObjectModel, point_links: list[tuple[int, int, int, 
     for v in views:
         ids_v = []
         for k_c in range(len(v.corners)):
-            pts = apply(v.T_object_view, v.corner_points(k_c))
+            pts = transform_points(v.T_object_view, v.corner_points(k_c))
             found = next((i for i, g in enumerate(cgroups) if np.linalg.norm(g[0][0] - pts[0]) <= tol_m
                           and _same_arms(g[0], pts)), None)
             if found is None:

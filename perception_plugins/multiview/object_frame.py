@@ -40,18 +40,4 @@ def object_frame(p1: ArrayLike, p2: ArrayLike, z_world_cam: ArrayLike) -> Array:
     return T
 
 
-def invert(T: Array) -> Array:
-    """The inverse of a rigid 4×4 transform."""
-    out = np.eye(4)
-    out[:3, :3] = T[:3, :3].T
-    out[:3, 3] = -T[:3, :3].T @ T[:3, 3]
-    return out
-
-
-def apply(T: Array, points: ArrayLike) -> Array:
-    """T·p for every row of (n, 3) points."""
-    pts = np.asarray(points, dtype=float).reshape(-1, 3)
-    return np.asarray(pts @ T[:3, :3].T + T[:3, 3])
-
-
-__all__ = ["apply", "invert", "object_frame"]
+__all__ = ["object_frame"]

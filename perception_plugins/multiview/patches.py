@@ -50,7 +50,7 @@ def sample(image: Image, grid: Array) -> NDArray[np.float32]:
     bottom = img[v0 + 1, u0] * (1 - fu) + img[v0 + 1, u0 + 1] * fu
     values = (top * (1 - fv) + bottom * fv).astype(np.float32)
     values[outside] = np.nan
-    return values
+    return np.asarray(values, dtype=np.float32)
 
 
 def zncc(a: NDArray[np.float32], b: NDArray[np.float32]) -> NDArray[np.float64]:

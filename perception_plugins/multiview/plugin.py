@@ -18,11 +18,11 @@ from typing import Any
 
 import numpy as np
 
+from mission.geometry import invert, transform_points
 from mission.plugin_api import ReferencingRequest, ReferencingResult, StereoImages
 from perception_plugins.multiview.errors import MultiviewError
 from perception_plugins.multiview.model import ObjectModel
 from perception_plugins.multiview.model_io import read_model
-from perception_plugins.multiview.object_frame import apply, invert
 from perception_plugins.multiview.recognition import APPROACHES, RecognitionSettings, recognise
 from perception_plugins.stereo.camera import RectifiedStereo
 from perception_plugins.stereo.pipeline import stereo_cloud
@@ -44,7 +44,7 @@ class MultiviewReferencingPlugin:
         if approach not in APPROACHES:
             raise MultiviewError(f"unknown approach {approach!r} (available: {', '.join(APPROACHES)})")
         self.settings = RecognitionSettings(views=int(own.get("views", self.settings.views)),
-                                            approach=approach)  # type: ignore[arg-type]
+                                            approach=approach)  # type: ignore[arg-type,unused-ignore]
 
     def reset(self) -> None:
         return None
@@ -83,7 +83,7 @@ class MultiviewReferencingPlugin:
         for v in r.views:
             pairs = v.points.pairs
             if len(pairs):
-                model_pts.append(apply(T_db_object @ v.view.T_object_view, v.view.points[pairs[:, 0]]))
+                model_pts.append(transform_points(T_db_object @ v.view.T_object_view, v.view.points[pairs[:, 0]]))
                 cam_pts.append(cloud.points_cam[pairs[:, 1]])
         details["model"] = str(self.paths[model.object_id])
         details["decision"] = details.pop("reason")  # a "reason" is what an agent reports for a failure
@@ -106,7 +106,7 @@ def visible_set(request: ReferencingRequest, T_cam_object: np.ndarray, K: np.nda
     w, h = size
     best: tuple[int, float, str] | None = None
     for pset in request.sets:
-        cam = apply(T_cam_object, np.asarray(pset.points, float))
+        cam = transform_points(T_cam_object, np.asarray(pset.points, float))
         z = np.maximum(cam[:, 2], 1e-6)
         uv = (cam[:, :2] / z[:, None]) * [K[0, 0], K[1, 1]] + [K[0, 2], K[1, 2]]
         inside = int(np.sum((cam[:, 2] > 0) & (uv[:, 0] >= 0) & (uv[:, 0] < w) & (uv[:, 1] >= 0) & (uv[:, 1] < h)))

@@ -24,10 +24,10 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from mission.geometry import transform_points
 from perception_plugins.multiview.errors import MultiviewError
 from perception_plugins.multiview.lines import LineMatch, LineSettings, recognise_lines
 from perception_plugins.multiview.model import ObjectModel, ViewModel
-from perception_plugins.multiview.object_frame import apply
 from perception_plugins.multiview.points import PointMatch, match_points, weighted_fit
 from perception_plugins.referencing.transform import robust_rigid_transform
 from perception_plugins.stereo.camera import RectifiedStereo
@@ -156,7 +156,7 @@ def fuse(results: list[ViewResult], cloud: Cloud, approach: Approach, tolerance:
                       (r.lines.corner_work_points.reshape(-1, 3), r.lines.corner_view_points.reshape(-1, 3))]
         for work, view in parts:
             src.append(work)
-            dst.append(apply(T_ov, view))
+            dst.append(transform_points(T_ov, view))
             z_src.append(work[:, 2])
             z_dst.append(view[:, 2])
     S, D = np.vstack(src), np.vstack(dst)

@@ -78,7 +78,7 @@ class OccupancyGrid:
         ijk = ((points - self.lo) * (1.0 / self.cell)).astype(np.int64)     # truncation: floor inside the box
         inside = np.all((ijk >= 0) & (ijk < self.shape), axis=-1)
         flat = (ijk[..., 0] * self.shape[1] + ijk[..., 1]) * self.shape[2] + ijk[..., 2]
-        return inside & self.flat[np.where(inside, flat, 0)]
+        return np.asarray(inside & self.flat[np.where(inside, flat, 0)], dtype=bool)
 
 
 def _gather(model: Array, tree: cKDTree, T: Array, radius: float) -> Index:

@@ -29,16 +29,13 @@ from typing import Any
 
 import numpy as np
 
+from mission.geometry import rotation_angle_deg, transform_points
 from mission.plugin_api import ReferencingRequest, ReferencingResult, StereoImages
 from perception_plugins.referencing.identification import reference
 from perception_plugins.stereo.camera import RectifiedStereo
 from perception_plugins.stereo.pipeline import stereo_cloud
 
 REFERENCE_RANGE_M = 3.6  # the range at which the request's tolerance applies (seed 000's virtual scene)
-
-
-def _rotation_deg(R: np.ndarray) -> float:
-    return math.degrees(math.acos(min(1.0, max(-1.0, (np.trace(R) - 1.0) / 2.0))))
 
 
 class StereoReferencingPlugin:
@@ -82,11 +79,11 @@ class StereoReferencingPlugin:
             tolerance = request.tolerance
             prior = request.prior_T_cam_object
             if prior is not None:
-                ranges = (model.points @ prior[:3, :3].T + prior[:3, 3])[:, 2]
+                predicted = transform_points(prior, model.points)
+                ranges = predicted[:, 2]
                 tolerance *= max(1.0, (float(np.max(ranges)) / REFERENCE_RANGE_M) ** 2)
             candidates = points
             if prior is not None and request.prior_radius is not None:
-                predicted = model.points @ prior[:3, :3].T + prior[:3, 3]
                 near = np.min(np.linalg.norm(points[:, None, :] - predicted[None, :, :], axis=2), axis=1)
                 candidates = points[near <= request.prior_radius]
             if len(candidates) < 3:
@@ -98,8 +95,8 @@ class StereoReferencingPlugin:
             T = found.T_cloud_model
             if prior is not None:
                 shift = float(np.max(np.linalg.norm(
-                    (model.points @ T[:3, :3].T + T[:3, 3]) - (model.points @ prior[:3, :3].T + prior[:3, 3]), axis=1)))
-                turn = _rotation_deg(T[:3, :3].T @ prior[:3, :3])
+                    transform_points(T, model.points) - transform_points(prior, model.points), axis=1)))
+                turn = rotation_angle_deg(T[:3, :3].T @ prior[:3, :3])
                 tilt = math.degrees(math.acos(min(1.0, max(-1.0, float(T[:3, 2] @ prior[:3, 2])))))
                 if shift > self.gate_m or turn > self.gate_deg:
                     refused.append(f"{model.set_id}: {shift:.1f} m / {turn:.0f} deg from the prior")

@@ -138,3 +138,7 @@ def robust_rigid_transform(src: Array, dst: Array, threshold: float, iterations:
         r = np.linalg.norm(apply(T, src) - dst, axis=1)
     rms = float(np.sqrt(np.mean(r[keep] ** 2))) if keep.any() else math.inf
     return RobustFit(T=T, inliers=keep, residuals=r, rms=rms)
+
+
+__all__ = ["RobustFit", "apply", "is_degenerate", "msac_score", "rigid_transform", "rigid_transforms",
+           "robust_rigid_transform", "rotation_angle_deg", "triangle_transforms"]

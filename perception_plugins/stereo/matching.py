@@ -87,10 +87,10 @@ def candidate_pairs(xy_left: Array, xy_right: Array, epipolar_tol: float, d_min:
 def descriptor_distances(left: Features, right: Features, i: Index, j: Index) -> Array:
     """Distances between the descriptors of left[i] and right[j], pair by pair."""
     if left.binary:
-        return _POPCOUNT[np.bitwise_xor(left.descriptors[i], right.descriptors[j])].sum(axis=1).astype(float)
+        return np.asarray(_POPCOUNT[np.bitwise_xor(left.descriptors[i], right.descriptors[j])].sum(axis=1), dtype=float)
     a = np.asarray(left.descriptors[i], dtype=np.float32)
     b = np.asarray(right.descriptors[j], dtype=np.float32)
-    return np.sqrt(np.maximum(((a - b) ** 2).sum(axis=1), 0.0)).astype(float)
+    return np.asarray(np.sqrt(np.maximum(((a - b) ** 2).sum(axis=1), 0.0)), dtype=float)
 
 
 def _best_two(group: Index, distance: Array) -> tuple[Index, Index, Array, Array]:

@@ -21,7 +21,20 @@ from mission.plugin_api import StereoImages
 from perception_plugins.vo.errors import VoError
 
 
-def _read_calib(path: Path) -> dict[str, NDArray[np.float64]]:
+def read_calibration(path: str | Path) -> tuple[NDArray[np.float64], float]:
+    """(K, baseline in m) from a KITTI `calib.txt`: K = P0[:, :3], baseline = (P0[0,3] − P1[0,3]) / P1[0,0].
+
+    Lines without `:` are skipped; raises `VoError` (FILE[:LINE]: what is wrong) for an unreadable file, a line
+    of non-numbers, a missing or short P0/P1, or a right camera that is not at a positive baseline.
+
+    >>> import tempfile
+    >>> f = Path(tempfile.mkdtemp()) / "calib.txt"
+    >>> _ = f.write_text("P0: 500 0 320 0 0 500 240 0 0 0 1 0\\nP1: 500 0 320 -125 0 500 240 0 0 0 1 0\\n")
+    >>> K, b = read_calibration(f)
+    >>> float(K[0, 0]), b
+    (500.0, 0.25)
+    """
+    path = Path(path)
     rows: dict[str, NDArray[np.float64]] = {}
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
@@ -39,7 +52,11 @@ def _read_calib(path: Path) -> dict[str, NDArray[np.float64]]:
     for key in ("P0", "P1"):
         if key not in rows or rows[key].size != 12:
             raise VoError(f"{path}: expected a line '{key}:' with the 12 numbers of a 3x4 projection matrix")
-    return {k: v.reshape(3, 4) for k, v in rows.items() if k in ("P0", "P1")}
+    P0, P1 = rows["P0"].reshape(3, 4), rows["P1"].reshape(3, 4)
+    baseline = float((P0[0, 3] - P1[0, 3]) / P1[0, 0])
+    if not baseline > 0:
+        raise VoError(f"{path}: P1 must put the right camera at a positive baseline (got {baseline})")
+    return np.asarray(P0[:, :3], dtype=float).copy(), baseline
 
 
 def _read_rows(path: Path, width: int) -> NDArray[np.float64]:
@@ -93,11 +110,7 @@ def read_kitti_sequence(path: str | Path) -> KittiSequence:
     if [p.name for p in lefts] != [p.name for p in rights]:
         raise VoError(f"{root}: image_0/ and image_1/ must hold the same file names ({len(lefts)} left, "
                       f"{len(rights)} right)")
-    calib = _read_calib(root / "calib.txt")
-    P0, P1 = calib["P0"], calib["P1"]
-    baseline = float((P0[0, 3] - P1[0, 3]) / P1[0, 0])
-    if not baseline > 0:
-        raise VoError(f"{root / 'calib.txt'}: P1 must put the right camera at a positive baseline (got {baseline})")
+    K, baseline = read_calibration(root / "calib.txt")
     n = len(lefts)
     if (root / "times.txt").exists():
         times: NDArray[np.float64] = np.asarray(_read_rows(root / "times.txt", 1)[:, 0], dtype=np.float64)
@@ -112,7 +125,7 @@ def read_kitti_sequence(path: str | Path) -> KittiSequence:
             raise VoError(f"{root / 'poses.txt'}: {len(rows)} poses for {n} frames")
         gt = np.tile(np.eye(4), (n, 1, 1))
         gt[:, :3, :] = rows.reshape(n, 3, 4)
-    return KittiSequence(root, lefts, rights, times, np.asarray(P0[:, :3], dtype=float), baseline, gt)
+    return KittiSequence(root, lefts, rights, times, K, baseline, gt)
 
 
-__all__ = ["KittiSequence", "read_kitti_sequence"]
+__all__ = ["KittiSequence", "read_calibration", "read_kitti_sequence"]

@@ -21,12 +21,12 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from mission.geometry import invert, transform_points
 from mission.plugin_api import StereoImages
 from perception_plugins.stereo import RectifiedStereo
 from perception_plugins.vo.features import lk, stereo_features, stereo_match
 from perception_plugins.vo.frontend import Array, Step, geometry_of, grey
 from perception_plugins.vo.motion import estimate_motion
-from perception_plugins.vo.se3 import invert, transform
 
 OFFSET_DEPTH_RATIO = 2.5
 """A fragment estimates the disparity offset only when its points' depths span this ratio (90th over 10th
@@ -103,7 +103,7 @@ class KltTracker:
         idx = np.flatnonzero(self._alive)
         guess = None
         if T_key_pred is not None and len(idx):
-            p = transform(invert(T_key_pred), self.key_points[idx])
+            p = transform_points(invert(T_key_pred), self.key_points[idx])
             guess = np.where((p[:, 2] > 1e-3)[:, None], _project(frame.K, p), self._last_uv[idx])
         left = grey(frame.left)
         tracked = self._for_tracking(left)
@@ -131,7 +131,7 @@ class KltTracker:
             ok[:] = True
         idx, uv = idx[ok], uv[ok]
         # Find the survivors in the end pair's right image, seeded by the motion's prediction, and re-estimate.
-        p = transform(invert(step.T_key_b), self.key_points[idx])
+        p = transform_points(invert(step.T_key_b), self.key_points[idx])
         geometry = self._geometry(frame)
         disparity = geometry.fB / np.maximum(p[:, 2], 1e-3) - geometry.doffs
         uv_r, right_ok = stereo_match(left, grey(frame.right), uv, geometry, disparity)

@@ -16,7 +16,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from perception_plugins.vo.se3 import from_rotvec_translation, invert, to_rotvec
+from mission.geometry import invert
+from perception_plugins.vo.se3 import from_rotvec_translation, to_rotvec
 
 Array = NDArray[np.float64]
 

@@ -18,13 +18,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mission.geometry import invert, transform_points
 from mission.plugin_api import StereoImages
 from perception_plugins.stereo import Cloud
 from perception_plugins.vo.chain import Chain
 from perception_plugins.vo.classic import describe, match_descriptors
 from perception_plugins.vo.frontend import Array
 from perception_plugins.vo.motion import estimate_motion
-from perception_plugins.vo.se3 import invert, transform
 
 
 @dataclass(frozen=True)
@@ -73,7 +73,7 @@ def view_overlap(reference: Reference, T_origin_cur: Array, points_cur: Array) -
     """The share of the current view's points that the reference camera sees (inside its image, in front)."""
     if len(points_cur) == 0:
         return 0.0
-    p = transform(invert(reference.T_origin_ref) @ T_origin_cur, points_cur)
+    p = transform_points(invert(reference.T_origin_ref) @ T_origin_cur, points_cur)
     K, (w, h) = reference.K, reference.image_size
     z = p[:, 2]
     front = z > 1e-3

@@ -19,6 +19,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from mission.geometry import invert
 from mission.plugin_api import StereoImages
 from perception_plugins.vo.adaptive import (
     common_view_mask,
@@ -33,7 +34,7 @@ from perception_plugins.vo.errors import VoError
 from perception_plugins.vo.frontend import Array, Frontend, Step, prepare
 from perception_plugins.vo.klt import KltTracker
 from perception_plugins.vo.network import NetworkSettings, ReferenceNetwork
-from perception_plugins.vo.se3 import from_rotvec_translation, invert, to_rotvec
+from perception_plugins.vo.se3 import from_rotvec_translation, to_rotvec
 
 _BRIDGE_STEPS = 7
 """Tracked steps whose median velocity bridges a tracking loss."""

@@ -1,10 +1,9 @@
-"""Rigid transforms for visual odometry: composition, inversion, interpolation and the constant-velocity model.
+"""Rigid transforms for visual odometry: rotation vectors, interpolation and the constant-velocity model (the
+inverse and the point transform are `mission.geometry`'s).
 
 `T_a_b` is a 4×4 homogeneous matrix mapping coordinates in frame b to frame a (camera frames follow OpenCV).
 
 >>> T = from_rotvec_translation([0.0, 0.0, np.pi / 2], [1.0, 0.0, 0.0])
->>> np.allclose(invert(T) @ T, np.eye(4))
-True
 >>> mid = interpolate(np.eye(4), T, 0.5)
 >>> round(float(np.degrees(np.linalg.norm(to_rotvec(mid[:3, :3])))), 6), mid[:3, 3].round(6).tolist()
 (45.0, [0.5, 0.0, 0.0])
@@ -19,15 +18,6 @@ from scipy.spatial.transform import Rotation, Slerp
 Matrix = NDArray[np.float64]
 
 
-def invert(T_a_b: Matrix) -> Matrix:
-    """T_b_a of a rigid T_a_b."""
-    T = np.eye(4)
-    R = T_a_b[:3, :3]
-    T[:3, :3] = R.T
-    T[:3, 3] = -R.T @ T_a_b[:3, 3]
-    return T
-
-
 def from_rotvec_translation(rotvec: ArrayLike, translation: ArrayLike) -> Matrix:
     """A transform from a rotation vector (rad) and a translation."""
     T = np.eye(4)
@@ -39,11 +29,6 @@ def from_rotvec_translation(rotvec: ArrayLike, translation: ArrayLike) -> Matrix
 def to_rotvec(R: Matrix) -> NDArray[np.float64]:
     """The rotation vector (rad) of a rotation matrix."""
     return np.asarray(Rotation.from_matrix(R).as_rotvec(), dtype=float)
-
-
-def transform(T_a_b: Matrix, points_b: NDArray[np.float64]) -> NDArray[np.float64]:
-    """(N, 3) points of frame b in frame a."""
-    return np.asarray(points_b @ T_a_b[:3, :3].T + T_a_b[:3, 3])
 
 
 def interpolate(T_w_a: Matrix, T_w_b: Matrix, s: float) -> Matrix:
@@ -86,5 +71,4 @@ def fill_poses(known: dict[int, Matrix], count: int) -> NDArray[np.float64]:
     return out
 
 
-__all__ = ["Matrix", "fill_poses", "from_rotvec_translation", "interpolate", "invert", "power", "to_rotvec",
-           "transform"]
+__all__ = ["Matrix", "fill_poses", "from_rotvec_translation", "interpolate", "power", "to_rotvec"]

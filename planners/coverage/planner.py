@@ -37,10 +37,10 @@ SMALL_AREA = 0.5e6     # m²: areas this small plan quickly, and try twice as ma
 TINY_AREA = 0.12e6     # m²: areas this small also order two more drafts in full
 ALTERNATIVE_AREA = 2.5e6   # m²: areas this small also try their lines without detours, and slid (larger ones
                            # take too long)
-HEADLAND_PLANS = 1     # of which also planned in the headland layout (more gained nothing measurable)
+HEADLAND_PLANS = 1     # of which also planned in the headland layout
 SLIVER, FINE_SLIVER = 1e-3, 1e-5   # parts of a band (in spacing²) a cut line may give up
 INSET = 0.9            # share of the swath's overlap reach by which the outermost lines stand in
-REACH = 0.5            # spacings by which a line may bend aside round a zone (more gained nothing measurable)
+REACH = 0.5            # spacings by which a line may bend aside round a zone
 PHASES = (0.0, 1.0)    # where the grid of lines is also slid to: either end of its slack (`build_sweep` phase)
 SLID = 1               # most promising line directions also laid out with their grid slid (three over small areas)
 
@@ -60,45 +60,39 @@ def meander(
 ) -> CoveragePlan:
     """Boustrophedon coverage of `area` minus the `exclude` polygons ([north, east] metres).
 
-    `spacing` is required (it has a default only so that it may follow `exclude` positionally). Lines are
-    `spacing` apart at most (the spacing is shrunk so that a whole number of lines fits), each long enough that a
-    swath of `spacing` covers its band (where `swath` is wider, the outermost lines stand in from the boundary by
-    most of the overlap, which may save a line); they stop short of the no-go zones by the turning radius plus
-    `clearance`, and no part of the path comes closer to a zone than half the clearance. Our lines need not stop
-    at a zone they do not cross by the clearance (no turn is made there): they run on past it, slid sideways by up
-    to the overlap they have to spare, or bent round it on Dubins ramps by up to half a spacing (`sweep.Passing`);
-    over areas up to 2.5 km² the lines without detours are planned too, and the shorter plan wins. (Lines cut at
-    every zone they come near, once planned too, gained nothing measurable.)
+    `spacing` is required (it has a default only so that it may follow `exclude` positionally). What the plan
+    guarantees:
 
-    Where no-go zones (or bays of the boundary) split the lines, the free area is decomposed into boustrophedon
-    cells, each flown as its own meander, and the cells, their start corners and directions are ordered to
-    minimise the transits plus the meanders as flown (exactly while the tasks and their variants are few, beyond
-    greedy tours from every variant, the best few refined by 2-opt + or-opt);
-    transits route round the zones. Turns are Dubins paths of radius `turn_radius`: U-turns when lines are at
-    least 2R apart, Ω-turns otherwise. Passes along the zones' boundaries are added where the lines leave more
-    than `fill_tolerance` of the free area uncovered by a swath of `swath` (default: the spacing). The path
-    starts at the line end nearest `start` and prefers to finish near `finish`.
+    - lines are at most `spacing` apart (shrunk so that a whole number fits), each long enough that a swath of
+      `swath` (default: the spacing) covers its band; with a wider swath the outermost lines stand in from the
+      boundary by most of the overlap;
+    - no part of the path comes closer to a zone than half the `clearance`; lines turn no closer than the turning
+      radius plus the clearance; turns are Dubins paths of radius `turn_radius` (U-turns when lines are at least
+      2R apart, Ω-turns otherwise) and transits route round the zones;
+    - passes along the zones' boundaries are added until at most `fill_tolerance` of the free area is left
+      uncovered;
+    - the path starts at the line end nearest `start` and prefers to finish near `finish`.
 
-    Where a zone is met, the contour passes next to it cover half a swath beyond the standoff: the lines there are
-    cut back to what the passes leave uncovered (`trims`), so that nothing is swept twice; where a boundary
-    slants across the lines, each band's tip that lies under the next line's swath is left to that line. A second
-    layout flies a ring round every zone and lays the lines over the rest only (`headlands`); the shorter wins.
+    How it is planned:
 
-    `heading="auto"` tries the directions of the boundary edges and a 2° grid, scores them in closed form by
-    number of lines (turns) and then length, and plans the best two and the single-direction sweep's heading up to
-    their cells and contour passes; the two shortest of those are cut back and ordered in full (the best also in
-    the headland layout). Areas up to 0.5 km², quick to plan, get twice as many directions at both stages (up to
-    0.12 km², two more ordered in full). The
-    best single-direction boustrophedon (`baseline_boustrophedon`) is planned too: every cell plan whose estimate
-    is within 2 % of it is flown in full, and the shortest no longer than it is returned; if there is none, that
-    sweep with its lines cut back the same way ("single-direction-cut", coarser cuts first) if it is shorter, else
-    the single-direction plan itself (`method` tells which).
-
-    Over areas up to 2.5 km² with zones, the most promising direction (three over small areas) is also laid out
-    with its rows a full spacing apart and the grid slid to either end of its slack, so that a zone may fall
-    between two lines instead of splitting one (`build_sweep` phase). Those drafts compete for the places to be
-    ordered in full, though the best unslid one (over larger areas, the two best) keeps its place whatever, and a
-    plan from one is kept only if its coverage holds (its outermost lines stand in further).
+    1. Directions: with `heading="auto"`, the directions of the boundary edges and a 2° grid are scored in closed
+       form (number of lines, then length: `heading.row_statistics`); the best `SHORTLIST` and the single-direction
+       sweep's heading go on (twice as many over areas up to `SMALL_AREA`).
+    2. Lines per direction (`sweep.build_sweep`): a line that passes a zone without crossing it runs on past it,
+       slid sideways within its spare overlap or bent round it on Dubins ramps (up to `REACH` spacings); over
+       areas up to `ALTERNATIVE_AREA` the lines without detours, and the most promising direction(s) with the
+       grid slid to either end of its slack (`PHASES`, `SLID`), are drafted too.
+    3. Cells: where zones or bays split the lines, the free area is decomposed into boustrophedon cells, each a
+       meander; contour passes fill the strips next to the zones, and the lines are cut back to what those passes
+       leave uncovered (`trims`), so that nothing is swept twice. A second layout flies a ring round every zone
+       and lays lines over the rest only (`headlands`, for the best `HEADLAND_PLANS` direction).
+    4. Order: the cells, their start corners and directions are ordered to minimise the transits plus the
+       meanders as flown (`ordering.order_variants`: exact while small, else greedy tours refined by 2-opt and
+       or-opt), for the `FULL_PLANS` best drafts (more over areas up to `TINY_AREA`).
+    5. Choice: the best single-direction boustrophedon (`baseline_boustrophedon`) is planned too; every cell
+       plan whose estimate is within 2 % of it is flown in full and the shortest no longer than it is returned;
+       failing that, the single-direction sweep with its lines cut back ("single-direction-cut") if shorter, else
+       the single-direction plan itself. `method` says which.
 
     >>> plan = meander([[0, 0], [0, 400], [100, 400], [100, 0]], spacing=25.0, turn_radius=5.0)
     >>> plan.heading_deg, len(plan.lines), plan.turns, plan.cells
@@ -159,7 +153,7 @@ def meander(
     # slid line grid, cut single-direction rows) may leave no more uncovered than the tolerance or, if that leaves
     # more, than the single-direction plan does
     def allowed() -> float:
-        return max(fill_tolerance * scene.free.area, uncovered_area(scene, base_runs)) + 1e-6
+        return float(max(fill_tolerance * scene.free.area, uncovered_area(scene, base_runs)) + 1e-6)
 
     plan = _shortest(scene, options, base, allowed)
     for neighbours, sliver in ((True, SLIVER), (False, SLIVER), (True, FINE_SLIVER), (False, FINE_SLIVER)):

@@ -3,6 +3,10 @@
 A visibility graph over the corners of the zones grown by the standoff gives the shortest polyline between two
 points that keeps out of the zones; all-pairs distances between the corners are computed once per request
 (Floyd–Warshall), so a batch of transit lengths costs a few array operations.
+
+The graph is kept as numpy arrays, not a networkx graph: measured (`benchmarks/networkx_timing.py`) over the
+coverage benchmark's 47 seeded scenes with zones (4–28 corners), `networkx.all_pairs_dijkstra` into the same
+distance and next-hop arrays took 4.5–4.8× as long as the vectorised Floyd–Warshall (median of two runs; 1.8–10×).
 """
 
 from __future__ import annotations
@@ -101,7 +105,7 @@ class Router:
         n, m = len(pp), len(qq)
         direct = np.linalg.norm(pp[:, None, :] - qq[None, :, :], axis=2)
         if self.empty:
-            return direct
+            return np.asarray(direct, dtype=float)
         clear = self.clear(np.repeat(pp, m, axis=0), np.tile(qq, (n, 1))).reshape(n, m)
         if clear.all() or len(self.nodes) == 0:
             return np.where(clear, direct, np.inf)
@@ -120,16 +124,16 @@ class Router:
         qq = np.atleast_2d(np.asarray(q, dtype=float))
         out = np.linalg.norm(pp - qq, axis=1)
         if self.empty:
-            return out
+            return np.asarray(out, dtype=float)
         blocked = np.flatnonzero(~self.clear(pp, qq))
         if blocked.size == 0:
-            return out
+            return np.asarray(out, dtype=float)
         if len(self.nodes) == 0:
             out[blocked] = np.inf
-            return out
+            return np.asarray(out, dtype=float)
         via = (self._reach(pp[blocked])[:, :, None] + self.dist[None, :, :]).min(axis=1)
         out[blocked] = (via + self._reach(qq[blocked])).min(axis=1)
-        return out
+        return np.asarray(out, dtype=float)
 
     def route(self, p: ArrayLike, q: ArrayLike) -> Array:
         """The shortest zone-avoiding polyline from p to q; the straight segment if none exists."""

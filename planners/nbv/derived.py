@@ -44,7 +44,7 @@ def contour_mask(states: NDArray[np.int8]) -> BoolArray:
     The unknown inside a scanned object touches no free voxel, so a fully scanned surface has no contour left.
     """
     frontier = (states == UNKNOWN) & _dilate(states == FREE, faces_only=True)
-    return (states == OCCUPIED) & _dilate(frontier, faces_only=False)
+    return np.asarray((states == OCCUPIED) & _dilate(frontier, faces_only=False), dtype=bool)
 
 
 class DerivedMaps:

@@ -95,7 +95,7 @@ class Scanner:
         b = np.linspace(-tv, tv, self.rays[1]) if self.rays[1] > 1 else np.zeros(1)
         bb, aa = np.meshgrid(b, a, indexing="ij")
         d = np.stack([np.ones(aa.size), aa.ravel(), bb.ravel()], axis=1)
-        return d / np.linalg.norm(d, axis=1, keepdims=True)
+        return np.asarray(d / np.linalg.norm(d, axis=1, keepdims=True), dtype=float)
 
     def directions(self, heading_deg: ArrayLike, pitch_deg: ArrayLike) -> Array:
         """World (NED) ray directions (N, R, 3) for N views: body rays pitched about y, then turned about z."""

@@ -40,7 +40,7 @@ def distance_matrix(points: ArrayLike) -> Array:
     if p.ndim != 2 or p.shape[1] not in (2, 3):
         raise ValueError(f"points must be an n × 2 or n × 3 array, got shape {p.shape}")
     diff = p[:, None, :] - p[None, :, :]
-    return np.sqrt(np.einsum("ijk,ijk->ij", diff, diff))
+    return np.asarray(np.sqrt(np.einsum("ijk,ijk->ij", diff, diff)), dtype=np.float64)
 
 
 def as_cost_matrix(cost: ArrayLike) -> Array:
@@ -83,7 +83,7 @@ def neighbour_lists(cost: Array, k: int) -> list[list[int]]:
     near = np.argpartition(sym, k - 1, axis=1)[:, :k] if k < n - 1 else np.argsort(sym, axis=1)[:, :k]
     rows = np.arange(n)[:, None]
     near = near[rows, np.argsort(sym[rows, near], axis=1, kind="stable")]
-    return near.tolist()
+    return [[int(j) for j in row] for row in near]
 
 
 def canonical(order: Sequence[int], start: int, closed: bool) -> tuple[int, ...]:

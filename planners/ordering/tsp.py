@@ -22,7 +22,7 @@ from .costs import Array, Tour, as_cost_matrix, distance_matrix, is_symmetric, n
 from .exact import EXACT_MAX_STOPS, held_karp
 from .kicks import iterated_precedence_search
 from .local import ClosedTour, iterated_local_search
-from .precedence import PrecedencePath, violations
+from .precedence import PrecedencePath, precedence_cycle, violations
 
 Method = Literal["auto", "exact", "heuristic"]
 NEIGHBOURS = 10                   # candidate list length
@@ -133,6 +133,10 @@ def _precedence_lists(n: int, start: int, precedences: Sequence[tuple[int, int]]
             continue
         need[after].append(before)
         follow[before].append(after)
+    cycle = precedence_cycle(n, need)
+    if cycle is not None:
+        raise ValueError("the precedence constraints admit no order (they contain a cycle: "
+                         f"{' → '.join(map(str, [*cycle, cycle[0]]))})")
     return need, follow
 
 

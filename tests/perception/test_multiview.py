@@ -16,6 +16,7 @@ os.environ.setdefault("MESA_SHADER_CACHE_DIR", tempfile.mkdtemp(prefix="mesa-cac
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
+from mission.geometry import invert, transform_points  # noqa: E402
 from perception_plugins.multiview import (  # noqa: E402
     MultiviewError,
     RecognitionSettings,
@@ -26,7 +27,6 @@ from perception_plugins.multiview import (  # noqa: E402
 )
 from perception_plugins.multiview.lines import recognise_lines  # noqa: E402
 from perception_plugins.multiview.model_io import read_model, write_model  # noqa: E402
-from perception_plugins.multiview.object_frame import apply, invert  # noqa: E402
 from perception_plugins.multiview.segments import stereo_segments  # noqa: E402
 from perception_plugins.stereo.camera import RectifiedStereo  # noqa: E402
 from perception_plugins.stereo.pipeline import stereo_cloud  # noqa: E402
@@ -50,7 +50,7 @@ def test_object_frame_follows_figure_2_on_a_hand_built_segment() -> None:
     assert np.allclose(R[:, 0], x_expected)                              # X' along [P1, P2']
     assert np.allclose(R.T @ R, np.eye(3)) and np.isclose(np.linalg.det(R), 1.0)   # right-handed
     # In the object frame, P2 lies in the X'Z' plane at its height difference along Z'.
-    p2_obj = apply(invert(T_view_object), p2[None])[0]
+    p2_obj = transform_points(invert(T_view_object), p2[None])[0]
     assert p2_obj[1] == pytest.approx(0.0, abs=1e-12)
     assert p2_obj[0] == pytest.approx(np.linalg.norm(p2_proj - p1))
     assert p2_obj[2] == pytest.approx((p2 - p1) @ z_world_cam)
@@ -66,8 +66,8 @@ def test_object_frame_is_independent_of_the_camera_it_is_measured_in() -> None:
         T_world_cam = np.eye(4)
         T_world_cam[:3, :3], T_world_cam[:3, 3] = q, rng.normal(0, 3, 3)
         T_cam_world = invert(T_world_cam)
-        T_view_object = object_frame(apply(T_cam_world, p1_w[None])[0], apply(T_cam_world, p2_w[None])[0],
-                                     T_world_cam[2, :3])
+        p1_cam, p2_cam = transform_points(T_cam_world, np.stack([p1_w, p2_w]))
+        T_view_object = object_frame(p1_cam, p2_cam, T_world_cam[2, :3])
         frames.append(T_world_cam @ T_view_object)                      # the object frame in the world
     assert np.allclose(frames[0], frames[1]) and np.allclose(frames[0], frames[2])
 
@@ -136,7 +136,7 @@ def box_edges_world(scene: Scene) -> np.ndarray:
         c = np.asarray(part.corners_world)
         if len(c) != 8:
             continue
-        local = apply(T_object_world, c)
+        local = transform_points(T_object_world, c)
         for i in range(8):
             for j in range(i + 1, 8):
                 if np.sum(np.abs(local[i] - local[j]) > 1e-6) == 1:     # differ along one box axis: an edge
@@ -158,7 +158,7 @@ def test_segment_lines_lie_on_the_objects_true_edges_with_their_face_on_the_righ
     geo = RectifiedStereo.from_K(view.K, view.baseline, (view.left.shape[1], view.left.shape[0]))
     segments = stereo_segments(view.left, view.right, geo)
     assert len(segments) >= 10
-    ends = np.array([apply(T_world_left, s.points) for s in segments])
+    ends = np.array([transform_points(T_world_left, s.points) for s in segments])
     dist = distance_to_edges(ends.reshape(-1, 3), box_edges_world(scene)).reshape(-1, 2)
     on_edges = np.all(dist <= 0.03, axis=1)
     assert on_edges.mean() >= 0.8, dist
@@ -181,12 +181,12 @@ def test_stage_2_recognises_lines_with_a_known_pose_and_not_with_a_wrong_one(sce
     T_world_view = scene.T_world_object_model @ view.T_object_view
     T_view_work = invert(T_world_view) @ frame.T_world_left
     found = recognise_lines(view, T_view_work, frame.left, frame.right, geo)
-    ends = apply(invert(T_view_work), view.segment_points().reshape(-1, 3)) @ frame.K.T
+    ends = transform_points(invert(T_view_work), view.segment_points().reshape(-1, 3)) @ frame.K.T
     uv = (ends[:, :2] / ends[:, 2:]).reshape(-1, 2, 2)
     inside = np.all((uv[..., 0] > 30) & (uv[..., 0] < 1170) & (uv[..., 1] > 30) & (uv[..., 1] < 870), axis=1)
     assert len(found.segments) >= 0.5 * inside.sum() and len(found.segments) >= 5
     # Recognised end points are where the model's end points truly are, seen from the working camera.
-    expected = apply(invert(T_view_work), found.view_points.reshape(-1, 3))
+    expected = transform_points(invert(T_view_work), found.view_points.reshape(-1, 3))
     err = np.linalg.norm(found.work_points.reshape(-1, 3) - expected, axis=1)
     assert np.median(err) <= 0.015 and np.percentile(err, 90) <= 0.05
     uv = expected @ frame.K.T
@@ -260,7 +260,7 @@ def test_the_full_model_averages_elements_seen_in_several_views(scene: Scene) ->
     for v in model.views:
         T = T_object_world @ scene.truth[v.name]
         multi = shared[v.point_ids] >= 2
-        errs.append(np.linalg.norm(model.points[v.point_ids[multi]] - apply(T, v.points[multi]), axis=1))
+        errs.append(np.linalg.norm(model.points[v.point_ids[multi]] - transform_points(T, v.points[multi]), axis=1))
     assert np.median(np.concatenate(errs)) <= 0.03
 
 

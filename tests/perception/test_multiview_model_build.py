@@ -15,10 +15,10 @@ import pytest  # noqa: E402
 import yaml  # noqa: E402
 
 from mission.cli import main  # noqa: E402
+from mission.geometry import invert  # noqa: E402
 from mission.model_build import ModelBuildError, build_from_run  # noqa: E402
 from mission.plugin_api import StereoImages  # noqa: E402
 from perception_plugins.multiview.model_io import read_model  # noqa: E402
-from perception_plugins.multiview.object_frame import invert  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 

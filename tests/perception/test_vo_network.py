@@ -13,12 +13,13 @@ os.environ.setdefault("MESA_SHADER_CACHE_DIR", tempfile.mkdtemp(prefix="mesa-cac
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
+from mission.geometry import invert  # noqa: E402
 from mission.plugin_api import StereoImages  # noqa: E402
 from perception_plugins.stereo import Cloud  # noqa: E402
 from perception_plugins.vo import Odometer, run_odometer, settings_for  # noqa: E402
 from perception_plugins.vo.chain import Chain  # noqa: E402
 from perception_plugins.vo.network import Reference, view_overlap  # noqa: E402
-from perception_plugins.vo.se3 import fill_poses, from_rotvec_translation, invert  # noqa: E402
+from perception_plugins.vo.se3 import fill_poses, from_rotvec_translation  # noqa: E402
 
 K = np.array([[500.0, 0.0, 299.5], [0.0, 500.0, 199.5], [0.0, 0.0, 1.0]])
 

@@ -14,10 +14,10 @@ os.environ.setdefault("MESA_SHADER_CACHE_DIR", tempfile.mkdtemp(prefix="mesa-cac
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
+from mission.geometry import invert  # noqa: E402
 from mission.plugin_api import OdometryRequest, OdometryResult, StereoImages  # noqa: E402
 from perception_plugins.vo import Odometer, VoError, estimate_trajectory, run_odometer, settings_for  # noqa: E402
 from perception_plugins.vo.plugin import StereoOdometryPlugin  # noqa: E402
-from perception_plugins.vo.se3 import invert  # noqa: E402
 
 
 class Sequence:

@@ -7,7 +7,7 @@ from conftest import WORLD
 
 from mission.frames import heading_of
 from mission.language.loader import load_world
-from mission.world.model import Seabed
+from mission.language.world import Seabed
 from mission.world.scene import build_scene
 from mission.world.terrain import generate_seabed
 

@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
+from mission.language.world import World
 from mission.sim.mjworld import MjWorld
 from mission.sim.scanner import Scanner3D
-from mission.world.model import World
 from mission.world.scene import build_scene
 from planners.nbv import Box, Scanner, View
 from planners.nbv import Scene as ViewScene
@@ -77,7 +77,7 @@ def test_a_scanner_following_the_vehicle_sees_the_reference_world_as_the_full_mo
     from mission.language.loader import load_world
     from mission.sim.scanner import LocalWorld
 
-    scene = build_scene(load_world(Path(__file__).resolve().parents[2] / "worlds" / "sps_field.yaml"))
+    scene = build_scene(load_world(Path(__file__).resolve().parents[3] / "worlds" / "sps_field.yaml"))
     full = Scanner3D(MjWorld(scene), range_sigma=0.0)
     local = Scanner3D(LocalWorld(scene, 12.0), range_sigma=0.0)
     for north, east, heading in ((205.0, 110.0, 0.0), (225.0, 118.0, 200.0), (290.0, 40.0, 90.0)):

@@ -30,7 +30,7 @@ from mission.sim.camera import (  # noqa: E402
 )
 from mission.world.scene import PlacedObject  # noqa: E402
 
-REFERENCE_WORLD = Path(__file__).resolve().parents[2] / "worlds" / "sps_field.yaml"
+REFERENCE_WORLD = Path(__file__).resolve().parents[3] / "worlds" / "sps_field.yaml"
 ALTITUDE = 3.6  # above the manifold's roof, as in seed 000's virtual scene
 ROOF_Z = -2.0  # the module's top in the object frame (z down)
 HEADING = 33.5  # manifold-1's true heading: image axes along the roof's edges

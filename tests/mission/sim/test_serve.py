@@ -23,7 +23,7 @@ from mission.language.models import Mission  # noqa: E402
 from mission.sim.serve import ServedVehicle  # noqa: E402
 from mission.vehicles.mavlink_link import mavutil  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 ROUTE = """  - id: leg
     transit: {to: {north: 40, east: 40}, depth: 10}
 """

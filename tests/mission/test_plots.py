@@ -15,7 +15,7 @@ from mission import load_mission, simulate
 from mission.cli import main
 from mission.plots import plot_run
 
-WORLD = Path(__file__).parents[1] / "worlds" / "sps_field.yaml"
+WORLD = Path(__file__).resolve().parents[2] / "worlds" / "sps_field.yaml"
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 FIGURES = ("map.png", "profile.png", "navigation.png")
 MISSION = """\

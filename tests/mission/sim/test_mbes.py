@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from mission.language.loader import load_world
+from mission.language.world import World
 from mission.sim.mbes import Multibeam
 from mission.sim.mjworld import R_MJ_NED, MjWorld, mj_dir_to_ned, mj_to_ned, mjworld_for, ned_dir_to_mj, ned_to_mj
-from mission.world.model import World
 from mission.world.scene import Scene, build_scene
 
-REFERENCE_WORLD = Path(__file__).resolve().parents[2] / "worlds" / "sps_field.yaml"
+REFERENCE_WORLD = Path(__file__).resolve().parents[3] / "worlds" / "sps_field.yaml"
 SEABED_DEPTH = 40.0
 BOX_TOP = 38.0  # a 4 × 4 × 2 m box resting on the flat seabed at the origin
 PIPE_TOP = 39.0  # a pipe along object y (east), radius 0.5 m, axis 0.5 m above the seabed, 6 m long

@@ -22,7 +22,7 @@ from mission.sim.camera import intrinsics  # noqa: E402
 from mission.sim.stereo_record import StereoRecording, read_stereo_recording  # noqa: E402
 from mission.sim.vehicle import TRAJECTORY_COLUMNS  # noqa: E402
 
-WORLD = Path(__file__).resolve().parents[2] / "worlds" / "sps_field.yaml"
+WORLD = Path(__file__).resolve().parents[3] / "worlds" / "sps_field.yaml"
 
 # Start 3 m from manifold-1's database position and reference it with small images, for 40 s: a few search and
 # fine captures (the agent turns the camera on only while capturing), in a few seconds of wall time.

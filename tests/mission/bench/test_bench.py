@@ -5,9 +5,12 @@ import json
 from mission.cli import main
 
 
-def test_bench_simspeed_quick_writes_every_check(tmp_path, capsys):
+def test_bench_simspeed_quick_writes_every_check_beside_the_full_results_and_leaves_them_alone(tmp_path, capsys):
+    full = tmp_path / "simspeed.json"
+    full.write_text('{"name": "simspeed", "quick": false}\n')
     assert main(["bench", "simspeed", "--quick", "--out", str(tmp_path)]) == 0
-    record = json.loads((tmp_path / "simspeed.json").read_text())
+    assert full.read_text() == '{"name": "simspeed", "quick": false}\n'
+    record = json.loads((tmp_path / "simspeed.quick.json").read_text())
     assert {"name", "quick", "machine", "timestamp", "results", "checks"} <= set(record)
     assert record["quick"] is True and record["machine"]["cores"] >= 1
     assert set(record["checks"]) == {"one_hour_mission_wall_time_s", "realtime_factor"}

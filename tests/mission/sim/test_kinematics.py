@@ -4,11 +4,11 @@ import math
 
 import pytest
 
-from mission.language.models import Vehicle
+from mission.language.models import VehicleSettings
 from mission.sim.kinematics import TrueState, step
 
-LIMITS = Vehicle(cruise_speed=1.5, max_speed=2.0, max_acceleration=0.2, max_yaw_rate=15, max_vertical_speed=0.5,
-                 turn_radius=6)
+LIMITS = VehicleSettings(cruise_speed=1.5, max_speed=2.0, max_acceleration=0.2, max_yaw_rate=15, max_vertical_speed=0.5,
+                         turn_radius=6)
 
 
 def run(state, heading, speed, depth, seconds, current=(0.0, 0.0), dt=0.1):

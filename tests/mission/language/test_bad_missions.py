@@ -21,7 +21,7 @@ from mission.cli import main
 from mission.errors import MissionError
 from mission.language import load_mission
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[3]
 BAD = ROOT / "tests" / "bad_missions"
 FILES = sorted(BAD.glob("*.yaml"))
 REFERENCE = ROOT / "missions" / "sps_field_inspection.yaml"
