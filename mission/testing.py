@@ -33,7 +33,7 @@ from mission.errors import LinkLostError
 from mission.frames import wrap_deg
 from mission.language.models import VehicleSettings
 from mission.plugin_api import ReferencingResult, StereoImages
-from mission.vehicle import HOVER_GAIN, HOVER_SPEED, Command, NavState, Observation
+from mission.vehicle import HOVER_GAIN, STATION_KEEPING_SPEED_M_S, Command, NavState, Observation
 
 YAW_GAIN = 1.0  # (deg/s) per deg of heading error, as the simulator's autopilot
 DEPTH_GAIN = 0.4  # (m/s) per m of depth error
@@ -115,7 +115,7 @@ class StubVehicle:
             depth_cmd = cmd.depth if cmd.depth is not None else self.depth
         if cmd.station is not None:
             en, ee = cmd.station[0] - self.north, cmd.station[1] - self.east
-            gain = min(HOVER_GAIN, HOVER_SPEED / max(math.hypot(en, ee), 1e-9))
+            gain = min(HOVER_GAIN, STATION_KEEPING_SPEED_M_S / max(math.hypot(en, ee), 1e-9))
             v_north, v_east = gain * en, gain * ee
             self.speed = math.hypot(v_north, v_east)
         else:

@@ -38,7 +38,7 @@ from mission.frames import camera_pose
 from mission.geometry import invert, transform_points
 from mission.language.models import Reference
 from mission.plugin_api import PointSetModel, ReferencingRequest, ReferencingResult, StereoImages
-from mission.plugin_host import PluginCall
+from mission.plugin_calls import PluginCall
 from mission.vehicle import Command, NavState, Observation
 
 __all__ = ["ReferenceAgent", "database_pose"]

@@ -1,5 +1,6 @@
-"""Test doubles for the agents' plug-in calls: a scripted plug-in inside the real `PluginHost`, and a host whose
-results become ready `delay` seconds of vehicle time after the frame was submitted (as an onboard host's do)."""
+"""Test doubles for the agents' plug-in calls: a host of scripted plug-ins whose results become ready `delay`
+seconds of vehicle time after submission (answered in submission order per role, as the real host does), and
+frames and estimates to feed them."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from mission.plugin_api import StereoImages
-from mission.plugin_host import PluginCall, PluginHost
+from mission.plugin_calls import PluginCall
 from mission.vehicle import NavState
 
 
@@ -20,12 +21,24 @@ class ScriptedPlugin:
         self.answer = answer
         self.requests: list[Any] = []
 
-    def configure(self, settings: Any) -> None:
-        return None
-
     def process(self, frame: StereoImages, request: Any) -> Any:
         self.requests.append(request)
         return self.answer(frame, request)
+
+
+class ScriptedHost:
+    """The host's contract (`has`, `submit` → `PluginCall`, `reset`, `close`) over scripted plug-ins."""
+
+    def __init__(self, plugins: dict[str, ScriptedPlugin], delays: dict[str, float] | None = None):
+        self.plugins = plugins
+        self.delays = delays or {}
+
+    def has(self, role: str) -> bool:
+        return role in self.plugins
+
+    def submit(self, role: str, frame: StereoImages, request: Any, now: float) -> PluginCall:
+        result = self.plugins[role].process(frame, request)
+        return PluginCall(role, frame.time, result, ready_at=now + self.delays.get(role, 0.0))
 
     def reset(self) -> None:
         return None
@@ -34,25 +47,19 @@ class ScriptedPlugin:
         return None
 
 
-class DelayedHost(PluginHost):
-    """The real host whose results become ready `delays[role]` seconds after submission (in submission order)."""
-
-    def __init__(self, *args: Any, delays: dict[str, float] | None = None, **kwargs: Any):
-        super().__init__(*args, **kwargs)
-        self.delays = delays or {}
-
-    def submit(self, role: str, frame: StereoImages, request: Any, now: float) -> PluginCall:
-        result = self.process(role, frame, request, now)
-        return PluginCall(role, frame.time, result, ready_at=now + self.delays.get(role, 0.0))
-
-
-def scripted_host(plugins: dict[str, ScriptedPlugin], delays: dict[str, float] | None = None) -> PluginHost:
+def scripted_host(plugins: dict[str, ScriptedPlugin], delays: dict[str, float] | None = None) -> Any:
     """A host (delayed when `delays` is given) with scripted plug-ins by role."""
-    host = DelayedHost({}, {}, lambda *a, **k: None, delays=delays)
-    for role, plugin in plugins.items():
-        host.plugins[role] = plugin
-        host.names[role] = f"scripted-{role}"
-    return host
+    return ScriptedHost(plugins, delays)
+
+
+class LateCall:
+    """A real call whose result is withheld until `delay` seconds of vehicle time after its submission."""
+
+    def __init__(self, call: PluginCall, ready_at: float):
+        self.call, self.ready_at, self.frame_time = call, ready_at, call.frame_time
+
+    def poll(self, now: float) -> Any | None:
+        return self.call.poll(now) if now >= self.ready_at else None
 
 
 def frame_at(t: float) -> StereoImages:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from doubles import DelayedHost
+from doubles import LateCall
 
 from mission import load_mission, simulate
 
@@ -32,16 +32,21 @@ def delayed_mission(folder: Path) -> Path:
 def run(tmp_path_factory):
     pytest.importorskip("cv2")
     path = delayed_mission(tmp_path_factory.mktemp("delayed"))
-    hosts: list[DelayedHost] = []
+    from mission.plugin_host import PluginHost
 
-    def delayed_host(*args, **kwargs):
-        hosts.append(DelayedHost(*args, delays=DELAYS, **kwargs))
-        return hosts[-1]
+    late: list[LateCall] = []
+
+    class DelayedHost(PluginHost):
+        """The real host (plug-ins in their workers), each result withheld `DELAYS[role]` seconds more."""
+
+        def submit(self, role, frame, request, now):
+            late.append(LateCall(super().submit(role, frame, request, now), now + DELAYS.get(role, 0.0)))
+            return late[-1]
 
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr("mission.sim.run.PluginHost", delayed_host)
+        patch.setattr("mission.sim.run.PluginHost", DelayedHost)
         result = simulate(load_mission(path), plots=False)
-    assert hosts, "the simulation did not use the delayed host"
+    assert len(late) > 100, "the simulation did not use the delayed host"
     return result
 
 

@@ -16,7 +16,8 @@ from mission.agents.inspect.placement import Placement
 from mission.agents.inspect.settings import InspectSettings
 from mission.agents.report import OdometryReport
 from mission.plugin_api import OdometryRequest, OdometryResult, StereoImages
-from mission.plugin_host import PluginCall, PluginHost
+from mission.plugin_calls import PluginCall
+from mission.plugin_host import PluginHost
 from mission.vehicle import NavState
 
 

@@ -21,7 +21,8 @@ from mission.agents.inspect.settings import InspectSettings
 from mission.agents.known_object import attempt_record
 from mission.geometry import invert, transform_points
 from mission.plugin_api import PointSetModel, ReferencingRequest, ReferencingResult, StereoImages
-from mission.plugin_host import PluginCall, PluginHost
+from mission.plugin_calls import PluginCall
+from mission.plugin_host import PluginHost
 from mission.vehicle import NavState
 
 
