@@ -12,7 +12,7 @@ MAX_CLASS_LINES = 250
 # TODO(integrator): the agents are being split into parts (issue 26, agents part), and the onboard work grew the
 # Executive class to 265 lines and mission/cli.py to 415; drop these when they are split.
 KNOWN_OVERSIZE = {"mission/agents/inspect.py", "mission/agents/explore.py", "mission/agents/inspect.py:InspectAgent",
-                  "mission/agents/explore.py:ExploreAgent", "mission/executive.py:Executive"}
+                  "mission/agents/explore.py:ExploreAgent"}
 
 
 def _sources() -> list[Path]:
