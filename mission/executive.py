@@ -17,7 +17,7 @@ import enum
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any
 
 from mission.agents import REGISTRY, Agent, AgentContext, AgentReport, Status
 from mission.agents.transit import TransitAgent
@@ -26,7 +26,7 @@ from mission.errors import LinkLostError
 from mission.knowledge import Knowledge
 from mission.language.models import Mission, RouteElement, Transit
 from mission.plugin_host import PluginHost
-from mission.safety import SafetyMonitors, Violation
+from mission.safety import SafetyMonitors, Violation, abort_legs, policy_record
 from mission.strategy import inspection_run, order_objects
 from mission.vehicle import Command, NavState, Observation, VehicleInterface
 
@@ -243,26 +243,10 @@ class Executive:
 
     def _abort(self, reason: str) -> None:
         """Go to the abort point at a safe depth, then surface there (per `safety.on_violation`)."""
-        m = self.mission
-        policy = m.safety.on_violation
         nav = self.vehicle.observe().nav
         self.report.aborted, self.report.abort_reason = True, reason
-        self.emit("abort", nav.time, reason=reason, abort_to=policy.abort_to if isinstance(policy.abort_to, str)
-                  else policy.abort_to.model_dump())
-        if isinstance(policy.abort_to, str):
-            to: Any = "home"
-            final_depth = m.home.depth
-        else:
-            to = {"north": policy.abort_to.north, "east": policy.abort_to.east}
-            final_depth = policy.abort_to.depth
-        safe_depth = min(nav.depth, 0.9 * m.safety.max_depth)
-        if nav.altitude is not None and nav.altitude < m.safety.min_altitude + 2.0:
-            safe_depth = max(0.0, safe_depth - (m.safety.min_altitude + 2.0 - nav.altitude))
-        navigation: Literal["usbl", "dead-reckoning"] = "usbl" if self.usbl_available else "dead-reckoning"
-        legs = [("abort-return", Transit(to=to, depth=safe_depth, navigation=navigation))]
-        if policy.surface:
-            legs.append(("abort-surface", Transit(to=to, depth=final_depth, navigation=navigation)))
-        for leg_id, params in legs:
+        self.emit("abort", nav.time, reason=reason, abort_to=policy_record(self.mission)["abort_to"])
+        for leg_id, params in abort_legs(self.mission, nav, self.usbl_available):
             element = RouteElement(id=leg_id, transit=params)
             self.report.elements.append(self._run(leg_id, "transit", TransitAgent(params), element, aborting=True))
 
@@ -341,12 +325,10 @@ class Executive:
 
     def _lost(self, nav: NavState) -> None:
         """The link is gone: nothing can be commanded any more. Log what the mission asked for on a violation."""
-        policy = self.mission.safety.on_violation
         self.report.aborted = True
         self.report.abort_reason = self.report.abort_reason or "link lost"
         self.emit("link_lost", nav.time, timeout_s=self.mission.safety.link_timeout,
-                  on_violation={"abort_to": policy.abort_to if isinstance(policy.abort_to, str)
-                                else policy.abort_to.model_dump(), "surface": policy.surface},
+                  on_violation=policy_record(self.mission),
                   note="the vehicle's own failsafe takes over; the mission's policy cannot be carried out")
 
     def _finish_safe(self, nav: NavState) -> None:

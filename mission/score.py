@@ -60,7 +60,7 @@ def score_run(run_dir: str | Path, truth_dir: str | Path) -> dict[str, Any]:
     true = {c: resample(t_true, t, truth[c], angle=(c == "heading")) for c in ("north", "east", "depth", "heading",
                                                                                "altitude")}
     est = {c: run[c][inside] for c in ("north_est", "east_est", "depth_est")}
-    metrics = json.loads((run_dir / "metrics.json").read_text(encoding="utf-8"))
+    metrics: dict[str, Any] = json.loads((run_dir / "metrics.json").read_text(encoding="utf-8"))
     navigation = navigation_errors(true["north"], true["east"], true["depth"], est["north_est"], est["east_est"],
                                    est["depth_est"])
     if (truth_dir / "usbl.csv").is_file():

@@ -9,9 +9,7 @@ ROOT = Path(__file__).resolve().parents[1]
 MAX_MODULE_LINES = 400
 MAX_CLASS_LINES = 250
 
-# TODO(integrator): the onboard work grew the Executive class to 265 lines and mission/cli.py to 415; drop these
-# when they are split.
-KNOWN_OVERSIZE = {"mission/executive.py:Executive", "mission/cli.py"}
+KNOWN_OVERSIZE: set[str] = set()  # every module and class of the packages is within the limits
 
 
 def _sources() -> list[Path]:

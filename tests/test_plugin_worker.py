@@ -214,12 +214,13 @@ def test_in_simulated_time_a_result_is_ready_after_the_calls_cpu_time_and_not_be
 
 def test_in_simulated_time_the_budget_counts_cpu_time_so_a_slow_machine_is_no_fault(host_of):
     """A plug-in that waits 1.5 s of wall time with no CPU (a loaded machine, as far as the call can tell) is
-    within a 1 s budget in simulation, and its result is ready one quantum after submission."""
+    within a 1 s budget in simulation, and its result is ready a few quanta after submission (the call's own CPU:
+    unpickling the frame, which a loaded machine stretches)."""
     host, recorder = host_of("SleepingPlugin", {"sleep_s": 1.5}, simulated_clock=True, budget_s=1.0)
     call = host.submit("referencing", frame(3.0), FAULT, 3.0)
     result = call.poll(3.5)
     assert result is not None and result.recognised
-    assert call.ready_at == pytest.approx(3.01)
+    assert 3.0 < call.ready_at <= 3.05  # not the 1.5 s of sleep
     assert recorder.faults() == []
 
 

@@ -121,12 +121,12 @@ class MavlinkVehicle:
         capacity = self.mission.vehicle.energy_wh
         bat = self.link.latest("BATTERY_STATUS")
         if bat is not None and bat.energy_consumed >= 0:
-            return capacity - bat.energy_consumed * 100.0 / 3600.0  # hJ → Wh
+            return capacity - float(bat.energy_consumed) * 100.0 / 3600.0  # hJ → Wh
         if bat is not None and bat.battery_remaining >= 0:
-            return capacity * bat.battery_remaining / 100.0
+            return capacity * float(bat.battery_remaining) / 100.0
         status = self.link.latest("SYS_STATUS")
         if status is not None and status.battery_remaining >= 0:
-            return capacity * status.battery_remaining / 100.0
+            return capacity * float(status.battery_remaining) / 100.0
         return capacity
 
     def _watch_mode(self, t: float) -> None:
