@@ -90,7 +90,8 @@ def survey_map_for(knowledge: Knowledge, target: Target) -> dict[str, Any] | Non
         i = int(round((target.north - n0) / cell))
         j = int(round((target.east - e0) / cell))
         if 0 <= i < depth.shape[0] and 0 <= j < depth.shape[1]:
-            return products
+            found: dict[str, Any] = products
+            return found
     return None
 
 

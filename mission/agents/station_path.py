@@ -39,7 +39,7 @@ class StationPath:
         """The point at arc length `s` (clamped to the path)."""
         s = min(max(s, 0.0), self.length)
         if len(self.points) == 1:
-            return self.points[0].copy()
+            return np.array(self.points[0], dtype=np.float64)
         k = int(np.clip(np.searchsorted(self.cumulative, s, side="right") - 1, 0, len(self.points) - 2))
         span = self.cumulative[k + 1] - self.cumulative[k]
         t = (s - self.cumulative[k]) / span if span > 0 else 0.0
@@ -63,7 +63,7 @@ class StationPath:
     def carrot(self, position: ArrayLike) -> Array:
         """The station to hold now; sets `done` once the end is reached."""
         if self.done:
-            return self.points[-1].copy()
+            return np.array(self.points[-1], dtype=np.float64)
         self.progress = max(self.progress, self.project(position))
         end = self.points[-1]
         if self.length - self.progress <= self.arrival and \

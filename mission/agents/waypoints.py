@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numpy.typing import NDArray
 
 from mission.guidance import leg_progress, los_heading
@@ -13,7 +14,7 @@ from mission.guidance import leg_progress, los_heading
 class PathFollower:
     """Steers along `waypoints` ((K, 2) north, east) from the vehicle's position when it starts."""
 
-    def __init__(self, start: tuple[float, float], waypoints: NDArray, lookahead: float, acceptance: float):
+    def __init__(self, start: tuple[float, float], waypoints: NDArray[np.float64], lookahead: float, acceptance: float):
         self.points = [start] + [(float(n), float(e)) for n, e in waypoints]
         self.leg = 0
         self.lookahead = lookahead

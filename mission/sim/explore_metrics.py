@@ -95,7 +95,7 @@ def distance_to_part(points: Array, obj: PlacedObject, part: Part) -> Array:
 
 
 def distance_to_object(points: Array, obj: PlacedObject) -> Array:
-    return np.min([distance_to_part(points, obj, p.part) for p in obj.parts], axis=0)
+    return np.asarray(np.min([distance_to_part(points, obj, p.part) for p in obj.parts], axis=0))
 
 
 def surface_points(obj: PlacedObject, scene: Scene, spacing: float) -> Array:

@@ -52,4 +52,4 @@ class Placement:
 
     def camera_in_object(self, nav: NavState) -> np.ndarray:
         """T_object_cam at the estimated pose `nav`, in the object as placed now."""
-        return invert(self.T_wo) @ self.camera_in_world(nav)
+        return np.asarray(invert(self.T_wo) @ self.camera_in_world(nav))
