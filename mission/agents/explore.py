@@ -51,8 +51,7 @@ from mission.agents.station_path import StationPath
 from mission.frames import wrap_deg
 from mission.language.models import Explore
 from mission.vehicle import Command, NavState, Observation, ScanFrame
-from planners.nbv import NbvPlanner, Scanner, View, Weights, connect
-from planners.nbv.grid import UNKNOWN
+from planners.nbv import UNKNOWN, NbvPlanner, Scanner, View, Weights, connect
 
 PLANNING_RAYS = (24, 18)  # the planner's model of the frustum; the sensor itself has more rays
 NAV_MARGIN_M = 1.0

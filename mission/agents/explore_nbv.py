@@ -14,9 +14,19 @@ from mission.agents.report import ExploredObject
 from mission.frames import rotation_zyx
 from mission.knowledge import Knowledge
 from mission.vehicle import ScanFrame
-from planners.nbv import NbvPlanner, Scan, Scanner, View, Views, Weights, segment_safe
-from planners.nbv.candidates import is_safe_view
-from planners.nbv.grid import FREE, UNKNOWN, StateGrid
+from planners.nbv import (
+    FREE,
+    UNKNOWN,
+    NbvPlanner,
+    Scan,
+    Scanner,
+    StateGrid,
+    View,
+    Views,
+    Weights,
+    is_safe_view,
+    segment_safe,
+)
 
 FOCUS_MARGIN_M = 1.5  # the object's region: its footprint's circle and its height grown by this much
 RESOLUTION_M = 0.25

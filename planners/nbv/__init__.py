@@ -8,10 +8,10 @@ synthetic box-and-cylinder scene with an exact-ray-casting scanner for tests and
 """
 
 from planners.nbv.baseline import RecedingHorizonNbv
-from planners.nbv.candidates import candidate_views, is_safe
+from planners.nbv.candidates import candidate_views, is_safe, is_safe_view
 from planners.nbv.derived import DerivedMaps, contour_mask
 from planners.nbv.explore import ExplorationLog, connect, explore, run_exploration, segment_safe
-from planners.nbv.grid import StateGrid
+from planners.nbv.grid import FREE, OCCUPIED, UNKNOWN, StateGrid
 from planners.nbv.planner import NbvPlanner, Scan
 from planners.nbv.scene import Box, Cylinder, Scene, survey_scans
 from planners.nbv.utility import CONTOUR, FRONTIER, ViewTerms, Weights, next_best_view, utility_terms, view_utility
@@ -20,6 +20,9 @@ from planners.nbv.visibility import Visibility, visibility
 
 __all__ = [
     "CONTOUR",
+    "FREE",
+    "OCCUPIED",
+    "UNKNOWN",
     "FRONTIER",
     "Box",
     "Cylinder",
@@ -37,6 +40,7 @@ __all__ = [
     "Visibility",
     "Weights",
     "candidate_views",
+    "is_safe_view",
     "connect",
     "contour_mask",
     "explore",
