@@ -1,4 +1,5 @@
-"""Metrics of a simulated run: what the executive reported, measured against the truth the simulator kept."""
+"""Metrics of a simulated run: what the executive reported, measured against the truth the simulator kept (the
+navigation error and the elements' true tracks by `mission.scoring`, as `auv score` does for `auv run`)."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from mission.agents.report import ExploreReport, InspectReport, SurveyReport
 from mission.executive import ElementReport, ExecutionReport
 from mission.frames import heading_of, invert, wrap_deg
 from mission.language.models import Mission
+from mission.scoring import ElementSpan, navigation_errors, track_metrics
 from mission.sim.vehicle import SimulatedVehicle
 from mission.world.scene import Scene
 
@@ -76,22 +78,14 @@ def _element_metrics(report: ExecutionReport, times: np.ndarray, north: np.ndarr
                      altitude: np.ndarray, vehicle: SimulatedVehicle, scene: Scene) -> list[dict[str, Any]]:
     mission = vehicle.mission
     out = []
-    step = np.hypot(np.diff(north, prepend=north[:1]), np.diff(east, prepend=east[:1])) if len(north) else north
     for rep in report.elements:
         item: dict[str, Any] = {"id": rep.id, "kind": rep.kind, "status": rep.status,
                                 "duration_s": round(rep.duration_s, 2)}
         if rep.reason:
             item["reason"] = rep.reason
-        if rep.kind == "transit" and rep.planned_path and math.isfinite(rep.end_time) and len(times):
-            k = min(int(np.searchsorted(times, rep.end_time)), len(times) - 1)
-            goal = rep.planned_path[-1]
-            item["goal"] = [round(goal[0], 3), round(goal[1], 3)]
-            item["end_position_error_m"] = round(math.hypot(north[k] - goal[0], east[k] - goal[1]), 3)
-        if math.isfinite(rep.end_time) and len(times):
-            window = (times > rep.start_time) & (times <= rep.end_time)
-            item["path_length_m"] = round(float(step[window].sum()), 2)
-            if window.any():  # the true altitude above whatever lies below (seabed or object)
-                item["min_altitude_m"] = round(float(altitude[window].min()), 3)
+        goal = rep.planned_path[-1] if rep.kind == "transit" and rep.planned_path else None
+        span = ElementSpan(rep.id, rep.start_time, rep.end_time, goal)
+        item.update(track_metrics(span, times, north, east, altitude))
         details = rep.details
         if rep.kind == "survey" and isinstance(details, SurveyReport):
             item.update(_survey_truth(details, rep, mission, scene))
@@ -119,7 +113,6 @@ def run_metrics(mission_name: str, seed: int, report: ExecutionReport, vehicle: 
     rows = vehicle.log.rows
     arr = np.array([r[:14] for r in rows], dtype=float) if rows else np.zeros((0, 14))
     times, north, east, depth = arr[:, 0], arr[:, 1], arr[:, 2], arr[:, 3]
-    err = np.hypot(arr[:, 6] - north, arr[:, 7] - east)
     mission_time = report.end_time - report.start_time
     fixes = vehicle.log.fixes
     capacity = vehicle.mission.vehicle.energy_wh
@@ -129,6 +122,9 @@ def run_metrics(mission_name: str, seed: int, report: ExecutionReport, vehicle: 
         "completed": report.completed,
         "aborted": report.aborted,
         "abort_reason": report.abort_reason or None,
+        "link_lost": report.link_lost,
+        "stopped": report.stopped,
+        "paused_s": round(report.paused_s, 2),
         "mission_time_s": round(mission_time, 2),
         "wall_time_s": round(wall_time_s, 3),
         "realtime_factor": round(mission_time / wall_time_s, 1) if wall_time_s > 0 else None,
@@ -139,10 +135,7 @@ def run_metrics(mission_name: str, seed: int, report: ExecutionReport, vehicle: 
         "safety_violations": report.violations,
         "seabed_contacts": vehicle.log.seabed_contacts,
         "navigation": {
-            "position_error_rms_m": round(float(np.sqrt(np.mean(err**2))), 3) if len(err) else 0.0,
-            "position_error_max_m": round(float(err.max()), 3) if len(err) else 0.0,
-            "position_error_final_m": round(float(err[-1]), 3) if len(err) else 0.0,
-            "depth_error_rms_m": round(float(np.sqrt(np.mean((arr[:, 8] - depth) ** 2))), 3) if len(err) else 0.0,
+            **navigation_errors(north, east, depth, arr[:, 6], arr[:, 7], arr[:, 8]),
             "usbl_fixes": sum(1 for f in fixes if f.used),
             "usbl_rejected": sum(1 for f in fixes if f.used and not f.accepted),
         },
