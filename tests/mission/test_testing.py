@@ -10,7 +10,7 @@ from mission.errors import LinkLostError
 from mission.language.models import VehicleSettings
 from mission.plugin_api import PerceptionPlugin, ReferencingResult
 from mission.testing import FakeAgent, FakeStep, ScriptedPlugin, StubFaults, StubVehicle, blank_frame, take_from
-from mission.vehicle import HOVER_SPEED, Command
+from mission.vehicle import STATION_KEEPING_SPEED_M_S, Command
 
 
 def run(vehicle: StubVehicle, command: Command, seconds: float) -> None:
@@ -38,7 +38,7 @@ def test_the_stub_holds_a_commanded_altitude_over_its_flat_seabed_at_the_vertica
 def test_the_stub_station_keeps_at_hover_speed_and_stops_on_the_station():
     vehicle = StubVehicle(control_period=0.2)
     run(vehicle, Command(heading=0.0, speed=1.5, depth=0.0, station=(10.0, 0.0)), 10.0)
-    assert vehicle.north == pytest.approx(HOVER_SPEED * 10.0, abs=1e-6)
+    assert vehicle.north == pytest.approx(STATION_KEEPING_SPEED_M_S * 10.0, abs=1e-6)
     run(vehicle, Command(heading=0.0, speed=1.5, depth=0.0, station=(10.0, 0.0)), 120.0)
     assert math.hypot(vehicle.north - 10.0, vehicle.east) < 0.01
 
