@@ -49,9 +49,10 @@ def element_items(report: ExecutionReport) -> list[dict[str, Any]]:
     return items
 
 
-def onboard_metrics(mission_name: str, seed: int, report: ExecutionReport, wall_time_s: float,
-                    estimated_distance_m: float, energy_used_wh: float, capacity_wh: float) -> dict[str, Any]:
-    """The `metrics.json` of an `auv run` (see the module docstring)."""
+def run_fields(mission_name: str, seed: int, report: ExecutionReport, wall_time_s: float, distance_m: float,
+               energy_used_wh: float, capacity_wh: float) -> dict[str, Any]:
+    """The head of every run's `metrics.json` (`auv simulate`'s and `auv run`'s): how the run ended and what it
+    took."""
     mission_time = report.end_time - report.start_time
     return {
         "mission": mission_name,
@@ -65,9 +66,17 @@ def onboard_metrics(mission_name: str, seed: int, report: ExecutionReport, wall_
         "mission_time_s": round(mission_time, 2),
         "wall_time_s": round(wall_time_s, 3),
         "realtime_factor": round(mission_time / wall_time_s, 1) if wall_time_s > 0 else None,
-        "distance_m": round(estimated_distance_m, 2),
+        "distance_m": round(distance_m, 2),
         "energy_wh": round(energy_used_wh, 2),
         "energy_remaining_percent": round(100.0 * (1.0 - energy_used_wh / capacity_wh), 2) if capacity_wh else None,
+    }
+
+
+def onboard_metrics(mission_name: str, seed: int, report: ExecutionReport, wall_time_s: float,
+                    estimated_distance_m: float, energy_used_wh: float, capacity_wh: float) -> dict[str, Any]:
+    """The `metrics.json` of an `auv run` (see the module docstring)."""
+    return {
+        **run_fields(mission_name, seed, report, wall_time_s, estimated_distance_m, energy_used_wh, capacity_wh),
         "elements": element_items(report),
         "safety_violations": jsonable(report.violations),
         "seabed_contacts": None,

@@ -14,6 +14,7 @@ from mission.agents.report import ExploreReport, InspectReport, SurveyReport
 from mission.executive import ElementReport, ExecutionReport
 from mission.frames import heading_of, invert, wrap_deg
 from mission.language.models import Mission
+from mission.onboard.report import run_fields
 from mission.scoring import ElementSpan, navigation_errors, track_metrics
 from mission.sim.vehicle import SimulatedVehicle
 from mission.world.scene import Scene
@@ -113,24 +114,10 @@ def run_metrics(mission_name: str, seed: int, report: ExecutionReport, vehicle: 
     rows = vehicle.log.rows
     arr = np.array([r[:14] for r in rows], dtype=float) if rows else np.zeros((0, 14))
     times, north, east, depth = arr[:, 0], arr[:, 1], arr[:, 2], arr[:, 3]
-    mission_time = report.end_time - report.start_time
     fixes = vehicle.log.fixes
-    capacity = vehicle.mission.vehicle.energy_wh
     return {
-        "mission": mission_name,
-        "seed": seed,
-        "completed": report.completed,
-        "aborted": report.aborted,
-        "abort_reason": report.abort_reason or None,
-        "link_lost": report.link_lost,
-        "stopped": report.stopped,
-        "paused_s": round(report.paused_s, 2),
-        "mission_time_s": round(mission_time, 2),
-        "wall_time_s": round(wall_time_s, 3),
-        "realtime_factor": round(mission_time / wall_time_s, 1) if wall_time_s > 0 else None,
-        "distance_m": round(vehicle.distance_m, 2),
-        "energy_wh": round(vehicle.energy_used_wh, 2),
-        "energy_remaining_percent": round(100.0 * (1.0 - vehicle.energy_used_wh / capacity), 2),
+        **run_fields(mission_name, seed, report, wall_time_s, vehicle.distance_m, vehicle.energy_used_wh,
+                     vehicle.mission.vehicle.energy_wh),
         "elements": _element_metrics(report, times, north, east, arr[:, 5], vehicle, scene),
         "safety_violations": report.violations,
         "seabed_contacts": vehicle.log.seabed_contacts,
