@@ -13,10 +13,7 @@ Two clocks (`simulated_clock`):
   `poll` never blocks. The budget is wall time, and a call still running at `budget_s` is abandoned and its
   worker restarted (the hard timeout is the budget).
 - simulation (`auv simulate`): the simulator is paused while code thinks, so a call's latency is charged to the
-  simulated clock (the worker's CPU time, rounded up to the role's quantum: `quanta[role]`, else `quantum_s`,
-  default 10 ms; the simulator uses `SIMULATION_QUANTA`, coarse enough that a role's usual calls all cost one
-  quantum, so that a run repeats for its seed: CPU time jitters by milliseconds, and a result arriving one control
-  tick earlier or later changes the rest of the run). `poll(now)` is None before
+  simulated clock (the worker's CPU time, rounded up to `quantum_s`, default 10 ms). `poll(now)` is None before
   the call can be ready, and when `now` may have reached its ready time it blocks until the worker has answered
   (at most the hard timeout). The budget is the worker's CPU time; the hard timeout, wall time, is
   `max(3 × budget_s, 30 s)` so that a loaded CI machine never kills a healthy call.
@@ -31,7 +28,6 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import replace
 from typing import Any
 
 from mission.plugin_api import StereoImages
@@ -41,18 +37,13 @@ DEFAULT_BUDGET_S = 5.0  # per call; generous for a software renderer's machine, 
 SIMULATED_HARD_TIMEOUT_S = 30.0  # simulation's hard (wall) timeout is at least this, and 3 × the budget
 
 
-# Simulated latency quanta by role (s): stereo VO takes 15–30 ms of CPU a frame at 1200×900 and must keep up with
-# 5 frames a second; referencing a pair takes 140–230 ms. A call over its quantum is charged whole quanta more.
-SIMULATION_QUANTA = {"odometry": 0.1, "referencing": 0.5}
-
-
 class PluginHost:
     """Plug-in workers by role (`referencing`, `odometry`), each call timed and guarded."""
 
     def __init__(self, roles: Mapping[str, str | None], settings: Mapping[str, Any], emit: Callable[..., None],
                  budget_s: float = DEFAULT_BUDGET_S, simulated_clock: bool = False,
                  hard_timeout_s: float | None = None, quantum_s: float = 0.01, start_timeout_s: float = 60.0,
-                 close_timeout_s: float = 5.0, quanta: Mapping[str, float] | None = None):
+                 close_timeout_s: float = 5.0):
         """Start and configure a worker per named plug-in (in parallel); a plug-in that fails to load or to
         configure raises PluginError here, after the other workers have been stopped."""
         self.emit = emit
@@ -68,8 +59,7 @@ class PluginHost:
         try:
             for role, name in roles.items():
                 if name is not None:
-                    timing = replace(self.timing, quantum_s=(quanta or {}).get(role, quantum_s))
-                    self.workers[role] = RoleWorker(role, name, settings, timing)
+                    self.workers[role] = RoleWorker(role, name, settings, self.timing)
                     self.names[role] = name
             deadline = time.monotonic() + start_timeout_s
             for worker in self.workers.values():

@@ -13,7 +13,7 @@ from mission.events import EventLog
 from mission.executive import ExecutionReport, Executive
 from mission.language.loader import load_world
 from mission.language.models import Mission
-from mission.plugin_host import SIMULATION_QUANTA, PluginHost
+from mission.plugin_host import PluginHost
 from mission.plugin_settings import plugin_settings
 from mission.sim.metrics import run_metrics
 from mission.sim.vehicle import SimulatedVehicle
@@ -80,8 +80,7 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
     wall0 = time.perf_counter()
     host: PluginHost | None = None
     try:
-        host = PluginHost(mission.plugins.model_dump(), plugin_settings(mission), emit, simulated_clock=True,
-                          quanta=SIMULATION_QUANTA) \
+        host = PluginHost(mission.plugins.model_dump(), plugin_settings(mission), emit, simulated_clock=True) \
             if any(mission.plugins.model_dump().values()) else None
         from mission.artifacts import Artifacts
 
