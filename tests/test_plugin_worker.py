@@ -220,7 +220,7 @@ def test_in_simulated_time_the_budget_counts_cpu_time_so_a_slow_machine_is_no_fa
     call = host.submit("referencing", frame(3.0), FAULT, 3.0)
     result = call.poll(3.5)
     assert result is not None and result.recognised
-    assert 3.0 < call.ready_at <= 3.05  # not the 1.5 s of sleep
+    assert 3.0 < call.ready_at <= 3.3  # its own CPU (tens of ms on a loaded machine), never the 1.5 s of sleep
     assert recorder.faults() == []
 
 
