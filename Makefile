@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml
 
 demo: $(STAMP)
 	$(BIN)/auv validate missions/field_survey.yaml
-	$(BIN)/auv simulate missions/field_survey.yaml --out runs/demo
+	$(BIN)/auv simulate missions/field_survey.yaml --out runs/demo --force
 
 test: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m pytest -n auto --dist worksteal

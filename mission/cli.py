@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -14,6 +15,7 @@ from typing import Any
 from mission.cli_onboard import add_onboard_commands
 from mission.errors import AuvError, MissionError
 from mission.extras import has, require
+from mission.interrupt import Interrupted, exit_code
 
 
 def _validate(args: argparse.Namespace) -> int:
@@ -65,10 +67,11 @@ def _simulate(args: argparse.Namespace) -> int:
         return _campaign(args, mission.name)
     out = Path(args.out) if args.out else Path("runs") / mission.name
     result = simulate(mission, seed=args.seed, out=out, plots=not args.no_plots, progress=not args.quiet,
-                      record_stereo=args.record_stereo)
+                      record_stereo=args.record_stereo, force=args.force, signals=True)
     m = result.metrics
-    state = "completed" if m["completed"] else ("ABORTED: " + (m["abort_reason"] or "") if m["aborted"]
-                                                 else "not completed")
+    state = "completed" if m["completed"] else ("INTERRUPTED" if m.get("interrupted") else
+                                                "ABORTED: " + (m["abort_reason"] or "") if m["aborted"]
+                                                else "not completed")
     print(f"{mission.name}: {state}; {m['mission_time_s']:.0f} s mission time in {m['wall_time_s']:.2f} s "
           f"({m['realtime_factor']}x real time), {m['distance_m']:.0f} m, {m['energy_wh']:.0f} Wh, "
           f"nav error rms {m['navigation']['position_error_rms_m']:.2f} m")
@@ -79,6 +82,8 @@ def _simulate(args: argparse.Namespace) -> int:
     if args.record_stereo:
         pairs = len(result.vehicle.log.frames)
         print(f"stereo stream: {pairs} pair(s) in {out / 'stereo'} (KITTI layout; `auv vo {out / 'stereo'}`)")
+    if result.signal is not None:
+        return exit_code(result.signal)
     return 0 if m["completed"] else 1
 
 
@@ -100,7 +105,8 @@ def _campaign(args: argparse.Namespace, name: str) -> int:
         print(f"  seed {row['seed']:>5}  {state:<13} {row['mission_time_s']:7.0f} s  wall {row['wall_time_s']:6.0f} s"
               + (f"  failed: {', '.join(failed)}" if failed else ""), flush=True)
 
-    report = run_campaign(args.mission, seeds, out, jobs=args.jobs, plots=not args.no_plots, on_run=line)
+    report = run_campaign(args.mission, seeds, out, jobs=args.jobs, plots=not args.no_plots, on_run=line,
+                          force=args.force)
     s = report["summary"]
     print(f"completed {s['completed']}/{s['runs']} ({s['completed_percent']:g} %), aborted {s['aborted']}, "
           f"crashed {s['crashed']}, safety violations {s['safety_violations']}")
@@ -229,6 +235,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seeds", metavar="LIST", help="many seeded runs, e.g. 1-20 or 1,5,9: OUT/seed-N/ each and "
                    "OUT/campaign.json with the completion rate and the worst figures (default OUT runs/NAME-seeds)")
     p.add_argument("--jobs", type=int, default=1, help="with --seeds, runs at a time (processes; default 1)")
+    p.add_argument("--force", action="store_true", help="replace an earlier run's (or campaign's) folder whole")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.add_argument("--record-stereo", action="store_true",
@@ -290,12 +297,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         for d in exc.diagnostics:
             print(d, file=sys.stderr)
         return 1
+    except Interrupted as exc:
+        print(f"auv: {exc}", file=sys.stderr)
+        return exc.exit_code
     except AuvError as exc:
         print(f"auv: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print("auv: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader went away (`auv … | head`): no traceback, and nothing more to print
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141
 
 
 if __name__ == "__main__":

@@ -5,11 +5,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
 from pathlib import Path
 from typing import Any
 
 from mission.errors import MissionError
+from mission.interrupt import exit_code
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -21,11 +23,16 @@ def _run(args: argparse.Namespace) -> int:
         raise MissionError([d for d in diags if not d.warning])
     for d in diags:
         print(d, file=sys.stderr)
+    if mission.faults:
+        from mission.faults import faults_diagnostic
+
+        raise MissionError([faults_diagnostic(mission, "`auv run` flies a real vehicle")])
     out = Path(args.out) if args.out else Path("runs") / f"{mission.name}-onboard"
     print(f"{mission.name}: connecting to {args.vehicle} (up to {args.connect_timeout:g} s)", file=sys.stderr)
-    result = run_onboard(mission, args.vehicle, out, connect_timeout=args.connect_timeout)
+    result = run_onboard(mission, args.vehicle, out, connect_timeout=args.connect_timeout, force=args.force)
     m = result.metrics
     state = "completed" if m["completed"] else ("LINK LOST" if m["link_lost"] else
+                                                "INTERRUPTED" if m.get("interrupted") else
                                                 "STOPPED" if m["stopped"] else
                                                 "ABORTED: " + (m["abort_reason"] or "") if m["aborted"]
                                                 else "not completed")
@@ -35,6 +42,8 @@ def _run(args: argparse.Namespace) -> int:
         extra = f" ({e['reason']})" if e.get("reason") else ""
         print(f"  {e['id']:<24} {e['kind']:<9} {e['status']:<10} {e['duration_s']:8.1f} s{extra}")
     print(f"run folder: {out}")
+    if m.get("interrupted"):
+        return exit_code(getattr(signal.Signals, m["signal"]))
     return 0 if m["completed"] else 1
 
 
@@ -115,6 +124,7 @@ def add_onboard_commands(sub: Any) -> None:
     p.add_argument("--vehicle", required=True, metavar="URI",
                    help="vehicle adapter and address, e.g. mavlink:udpin:0.0.0.0:14550 (`auv vehicles` lists them)")
     p.add_argument("--out", help="run folder (default: runs/MISSION_NAME-onboard)")
+    p.add_argument("--force", action="store_true", help="replace an earlier run's folder whole")
     p.add_argument("--connect-timeout", type=float, default=10.0, metavar="S",
                    help="seconds to wait for the vehicle (default 10)")
     p.set_defaults(func=_run)

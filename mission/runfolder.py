@@ -14,9 +14,10 @@
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
-import shutil
+import os
 import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -31,6 +32,7 @@ from mission.events import read_events
 from mission.knowledge import Knowledge
 from mission.language.loader import load_mission
 from mission.language.models import Mission
+from mission.runlock import RunLock, claim_run_folder
 
 TRAJECTORY_COLUMNS = (
     "time", "north", "east", "depth", "heading", "altitude",
@@ -50,79 +52,124 @@ class TrajectoryWriter:
     """trajectory.csv written as the run goes: a row per control tick, flushed at least every `FLUSH_S`."""
 
     def __init__(self, path: Path, columns: Sequence[str] = TRAJECTORY_COLUMNS):
-        self._file: IO[str] | None = path.open("w", newline="", encoding="utf-8")
-        self._csv = csv.writer(self._file)
-        self._csv.writerow(columns)
-        self._file.flush()
+        self.path = path
+        try:
+            self._file: IO[str] | None = path.open("w", newline="", encoding="utf-8")
+            self._csv = csv.writer(self._file)
+            self._csv.writerow(columns)
+            self._file.flush()
+        except OSError as exc:
+            raise RunFolderError(f"{path}: cannot write ({exc.strerror or exc})") from exc
         self._flushed = time.monotonic()
 
     def write(self, row: Iterable[object]) -> None:
         if self._file is None:
             return
-        self._csv.writerow([_cell(v) for v in row])
-        if time.monotonic() - self._flushed >= FLUSH_S:
-            self._file.flush()
-            self._flushed = time.monotonic()
+        try:
+            self._csv.writerow([_cell(v) for v in row])
+            if time.monotonic() - self._flushed >= FLUSH_S:
+                self._file.flush()
+                self._flushed = time.monotonic()
+        except OSError as exc:
+            raise RunFolderError(f"{self.path}: cannot write ({exc.strerror or exc})") from exc
 
     def close(self) -> None:
         if self._file is not None:
-            self._file.close()
-            self._file = None
+            try:
+                self._file.close()
+            except OSError as exc:
+                raise RunFolderError(f"{self.path}: cannot write ({exc.strerror or exc})") from exc
+            finally:
+                self._file = None
 
 
-def prepare_run_folder(out: Path, mission: Mission, seed: int) -> None:
-    """Create the folder and write the mission as run and its world, before the run starts."""
-    out.mkdir(parents=True, exist_ok=True)
-    for stale in ("events.jsonl", "metrics.json", "trajectory.csv", "usbl.csv"):
-        (out / stale).unlink(missing_ok=True)
-    for old_map in (out / "maps").glob("*.npz"):
-        old_map.unlink()
-    for old_plot in (out / "plots").glob("*.png"):
-        old_plot.unlink()
-    as_run = mission.model_dump(mode="json")
-    as_run["seed"] = seed
+def write_atomic(path: Path, data: str | bytes) -> None:
+    """Write a file whole or not at all: a temporary file beside it, renamed over it (`RunFolderError` on failure)."""
+    tmp = path.with_name(path.name + ".tmp")
+    try:
+        if isinstance(data, bytes):
+            tmp.write_bytes(data)
+        else:
+            tmp.write_text(data, encoding="utf-8")
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise RunFolderError(f"{path}: cannot write ({exc.strerror or exc})") from exc
+
+
+def prepare_run_folder(out: Path, mission: Mission, seed: int, force: bool = False,
+                       kind: str = "auv simulate") -> RunLock:
+    """Claim the folder for this run (`mission.runlock`: refusals, `force`, the lock, returned to be held for the
+    run's lifetime) and write the mission as run and its world, before the run starts."""
+    protected = [("mission", Path(mission.source))] if mission.source else []
     if mission.world is not None:
-        shutil.copyfile(mission.world, out / "world.yaml")
-        as_run["world"] = "world.yaml"
-    header = f"# The mission as run (seed {seed}), from {mission.source or 'memory'}.\n"
-    (out / "mission.yaml").write_text(header + yaml.safe_dump(as_run, sort_keys=False), encoding="utf-8")
+        protected.append(("world", Path(mission.world)))
+    lock = claim_run_folder(out, kind, protected, force)
+    try:
+        as_run = mission.model_dump(mode="json")
+        as_run["seed"] = seed
+        if mission.world is not None:
+            try:
+                world_text = Path(mission.world).read_bytes()
+            except OSError as exc:
+                raise RunFolderError(f"{mission.world}: cannot read the world ({exc.strerror or exc})") from exc
+            write_atomic(out / "world.yaml", world_text)
+            as_run["world"] = "world.yaml"
+        header = f"# The mission as run (seed {seed}), from {mission.source or 'memory'}.\n"
+        write_atomic(out / "mission.yaml", header + yaml.safe_dump(as_run, sort_keys=False))
+    except BaseException:
+        lock.release()
+        raise
+    return lock
 
 
 def write_trajectory(out: Path, rows: Iterable[Sequence[object]]) -> None:
-    writer = TrajectoryWriter(out / "trajectory.csv")
+    """trajectory.csv written whole (a temporary file renamed over it)."""
+    tmp = out / "trajectory.csv.tmp"
+    writer = TrajectoryWriter(tmp)
     for row in rows:
         writer.write(row)
     writer.close()
+    try:
+        os.replace(tmp, out / "trajectory.csv")
+    except OSError as exc:
+        raise RunFolderError(f"{out / 'trajectory.csv'}: cannot write ({exc.strerror or exc})") from exc
 
 
 def write_usbl(out: Path, fixes: Iterable[Any]) -> None:
-    """usbl.csv from fixes with time, north, east, used, accepted."""
-    with (out / "usbl.csv").open("w", newline="", encoding="utf-8") as f:
-        w = csv.writer(f)
-        w.writerow(("time", "north", "east", "used", "accepted"))
-        for fix in fixes:
-            w.writerow((f"{fix.time:.2f}", f"{fix.north:.3f}", f"{fix.east:.3f}", int(fix.used), int(fix.accepted)))
+    """usbl.csv from fixes with time, north, east, used, accepted (written whole or not at all)."""
+    text = io.StringIO(newline="")
+    w = csv.writer(text)
+    w.writerow(("time", "north", "east", "used", "accepted"))
+    for fix in fixes:
+        w.writerow((f"{fix.time:.2f}", f"{fix.north:.3f}", f"{fix.east:.3f}", int(fix.used), int(fix.accepted)))
+    write_atomic(out / "usbl.csv", text.getvalue())
 
 
 def write_metrics(out: Path, metrics: dict[str, Any]) -> None:
     """metrics.json, written whole or not at all (a temporary file renamed over the old one)."""
-    tmp = out / "metrics.json.tmp"
-    tmp.write_text(json.dumps(metrics, indent=2) + "\n", encoding="utf-8")
-    tmp.replace(out / "metrics.json")
+    write_atomic(out / "metrics.json", json.dumps(metrics, indent=2) + "\n")
 
 
-def write_run_results(out: Path, metrics: dict[str, Any], rows: Iterable[Sequence[object]], fixes: Iterable[Any],
+def write_run_results(out: Path, metrics: dict[str, Any], rows: Iterable[Sequence[object]] | None, fixes: Iterable[Any],
                       knowledge: Knowledge | None = None) -> None:
-    write_trajectory(out, rows)
+    """The results of a run at its end; `metrics.json`, written last, marks the folder complete (`rows`: the
+    trajectory when it was not streamed as the run went, None when it was)."""
+    if rows is not None:
+        write_trajectory(out, rows)
     write_usbl(out, fixes)
-    write_metrics(out, metrics)
     if knowledge is not None and knowledge.maps:
-        (out / "maps").mkdir(exist_ok=True)
         for element, products in knowledge.maps.items():
             arrays = {k: np.asarray(v) for k, v in products.items() if k != "lines"}
             lines = np.asarray(products.get("lines", []), dtype=float).reshape(-1, 2, 2)
             arrays["lines"] = lines
-            np.savez_compressed(out / "maps" / f"{element}.npz", **arrays)  # type: ignore[arg-type]
+            buffer = io.BytesIO()
+            np.savez_compressed(buffer, **arrays)  # type: ignore[arg-type]
+            try:
+                (out / "maps").mkdir(exist_ok=True)
+            except OSError as exc:
+                raise RunFolderError(f"{out / 'maps'}: cannot create ({exc.strerror or exc})") from exc
+            write_atomic(out / "maps" / f"{element}.npz", buffer.getvalue())
+    write_metrics(out, metrics)
 
 
 @dataclass
@@ -162,12 +209,25 @@ def read_csv(path: Path, text_columns: tuple[str, ...] = ()) -> tuple[dict[str, 
     return numeric, text
 
 
+def check_complete(folder: Path) -> None:
+    """Raise `RunFolderError` in one line unless the folder holds a finished (or cleanly interrupted) run: its
+    `metrics.json`, written last, is the end marker."""
+    if not folder.is_dir():
+        raise RunFolderError(f"{folder}: not a run folder (no such directory)")
+    if not (folder / "metrics.json").is_file():
+        if (folder / "events.jsonl").is_file() or (folder / "trajectory.csv").is_file():
+            raise RunFolderError(f"{folder}: incomplete run folder (no metrics.json: the run was killed, or is still "
+                                 "running)")
+        raise RunFolderError(f"{folder}: not a run folder (no metrics.json)")
+
+
 def read_run_folder(folder: str | Path) -> RunData:
     """Read a run folder written by `auv simulate` (RunFolderError says what is missing or malformed)."""
     folder = Path(folder)
     if not folder.is_dir():
         raise RunFolderError(f"{folder}: not a run folder (no such directory)")
-    for name in ("mission.yaml", "trajectory.csv", "events.jsonl", "metrics.json"):
+    check_complete(folder)
+    for name in ("mission.yaml", "trajectory.csv", "events.jsonl"):
         if not (folder / name).is_file():
             raise RunFolderError(f"{folder}: not a complete run folder (missing {name})")
     try:  # a finished run is read as it was: installed plug-ins and the world file no longer matter

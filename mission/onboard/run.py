@@ -10,19 +10,17 @@ interrupts at once.
 from __future__ import annotations
 
 import math
-import signal
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from types import FrameType
 from typing import Any
 
 from mission.artifacts import Artifacts
-from mission.errors import UnsupportedMissionError
+from mission.errors import MissionError, UnsupportedMissionError
 from mission.events import EventLog
 from mission.executive import ExecutionReport, Executive, unsupported_elements
+from mission.faults import faults_diagnostic
+from mission.interrupt import signal_name, stop_on_signals
 from mission.language.models import Mission
 from mission.onboard.report import onboard_metrics
 from mission.plugin_host import PluginHost
@@ -90,37 +88,22 @@ class RecordingVehicle:
         return max(0.0, self.energy_start_wh - self.energy_wh)
 
 
-@contextmanager
-def stop_on_signals(executive: Executive) -> Iterator[None]:
-    """SIGINT/SIGTERM ask the executive to stop cleanly; a second SIGINT interrupts at once."""
-    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-
-    def handler(signum: int, frame: FrameType | None) -> None:
-        executive.request_stop(f"stopped by {signal.Signals(signum).name}")
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-
-    for s in previous:
-        signal.signal(s, handler)
-    try:
-        yield
-    finally:
-        for s, h in previous.items():
-            signal.signal(s, h)
-
-
 def run_onboard(mission: Mission, uri: str, out: str | Path, connect_timeout: float = 10.0,
-                seed: int | None = None, signals: bool = True) -> OnboardResult:
+                seed: int | None = None, signals: bool = True, force: bool = False) -> OnboardResult:
     """Fly `mission` on the vehicle at `uri` and write the run folder `out` (see the module docstring).
 
     Raises `VehicleError` when the vehicle cannot be opened (the run folder then holds the mission and an
-    event saying why)."""
+    event saying why), `RunFolderError` when `out` cannot be a run folder (`mission.runlock`; `force` replaces an
+    earlier run's folder), and `MissionError` for a mission with `faults:` (simulation only)."""
+    if mission.faults:
+        raise MissionError([faults_diagnostic(mission, "`auv run` flies a real vehicle")])
     missing = unsupported_elements(mission)
     if missing:
         raise UnsupportedMissionError(
             f"cannot run '{mission.name}': no agent for {', '.join(f'{e.id} ({e.kind})' for e in missing)}")
     out = Path(out)
     seed = mission.seed if seed is None else seed
-    prepare_run_folder(out, mission, seed)
+    lock = prepare_run_folder(out, mission, seed, force=force, kind="auv run")
     log = EventLog(out / "events.jsonl")
     writer = TrajectoryWriter(out / "trajectory.csv")
     recording: RecordingVehicle | None = None
@@ -143,10 +126,7 @@ def run_onboard(mission: Mission, uri: str, out: str | Path, connect_timeout: fl
             roles = mission.plugins.model_dump()
             host = PluginHost(roles, plugin_settings(mission), emit) if any(roles.values()) else None
             executive = Executive(mission, recording, emit, plugins=host, artifacts=Artifacts(out))
-            if signals:
-                with stop_on_signals(executive):
-                    report = executive.run()
-            else:
+            with stop_on_signals(executive.request_stop, install=signals) as stop:
                 report = executive.run()
         finally:
             if host is not None:
@@ -155,9 +135,13 @@ def run_onboard(mission: Mission, uri: str, out: str | Path, connect_timeout: fl
         wall = time.perf_counter() - wall0
         metrics = onboard_metrics(mission.name, seed, report, wall, recording.distance_m,
                                   recording.energy_used_wh, mission.vehicle.energy_wh)
+        if stop.signum is not None:
+            metrics.update(interrupted=True, signal=signal_name(stop.signum))
+            log.emit("interrupted", report.end_time, signal=signal_name(stop.signum))
         write_metrics(out, metrics)
     finally:
         writer.close()
         log.close()
+        lock.release()
     return OnboardResult(metrics, report, out)
 

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import multiprocessing
-import os
 import re
 import traceback
 from collections.abc import Callable, Sequence
@@ -19,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from mission.errors import AuvError
+from mission.runfolder import write_atomic
 
 _RANGE = re.compile(r"^\s*(-?\d+)\s*(?:-\s*(-?\d+))?\s*$")
 
@@ -127,18 +127,28 @@ def _run_one(mission_path: str, seed: int, out: str, plots: bool) -> dict[str, A
     from mission.sim.run import simulate
 
     try:
-        result = simulate(load_mission(mission_path), seed=seed, out=out, plots=plots)
+        result = simulate(load_mission(mission_path), seed=seed, out=out, plots=plots,
+                          signals=multiprocessing.parent_process() is not None)
     except Exception as exc:  # noqa: BLE001 - one crashed run must not end the campaign; it is recorded
         return {"seed": seed, "error": f"{type(exc).__name__}: {exc}", "traceback": traceback.format_exc()}
     return run_summary(result.metrics)
 
 
 def run_campaign(mission_path: str | Path, seeds: Sequence[int], out: str | Path, jobs: int = 1,
-                 plots: bool = False, on_run: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
+                 plots: bool = False, on_run: Callable[[dict[str, Any]], None] | None = None,
+                 force: bool = False) -> dict[str, Any]:
     """Run `mission_path` once per seed (`jobs` processes at a time) into `out/seed-N/`; returns and writes
-    `out/campaign.json` (rewritten after every run)."""
+    `out/campaign.json` (rewritten after every run). `out` is claimed and locked for the campaign as a run folder
+    is (`mission.runlock`; `force` replaces an earlier campaign's folder)."""
+    from mission.runlock import claim_run_folder
+
     out_dir = Path(out)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    with claim_run_folder(out_dir, "auv simulate --seeds", [("mission", Path(mission_path))], force):
+        return _campaign(mission_path, seeds, out_dir, jobs, plots, on_run)
+
+
+def _campaign(mission_path: str | Path, seeds: Sequence[int], out_dir: Path, jobs: int, plots: bool,
+              on_run: Callable[[dict[str, Any]], None] | None) -> dict[str, Any]:
     rows: list[dict[str, Any]] = []
     report_path = out_dir / "campaign.json"
 
@@ -146,9 +156,7 @@ def run_campaign(mission_path: str | Path, seeds: Sequence[int], out: str | Path
         rows.append(row)
         rows.sort(key=lambda r: r["seed"])
         report = {"mission": str(mission_path), "seeds": list(seeds), "summary": aggregate(rows), "runs": rows}
-        tmp = report_path.with_suffix(".tmp")
-        tmp.write_text(json.dumps(report, indent=1))
-        os.replace(tmp, report_path)
+        write_atomic(report_path, json.dumps(report, indent=1))
         if on_run is not None:
             on_run(row)
 

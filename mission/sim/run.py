@@ -11,10 +11,12 @@ from mission.agents import REGISTRY
 from mission.errors import AuvError, UnsupportedMissionError
 from mission.events import EventLog
 from mission.executive import ExecutionReport, Executive
+from mission.interrupt import Interrupted, SignalStop, signal_name, stop_on_signals
 from mission.language.loader import load_world
 from mission.language.models import Mission
 from mission.plugin_host import PluginHost
 from mission.plugin_settings import plugin_settings
+from mission.runfolder import TrajectoryWriter, prepare_run_folder
 from mission.sim.metrics import run_metrics
 from mission.sim.vehicle import SimulatedVehicle
 from mission.vehicle import NavState
@@ -28,6 +30,7 @@ class RunResult:
     vehicle: SimulatedVehicle
     scene: Scene
     out: Path | None
+    signal: int | None = None  # the signal that stopped the run, if one did (`metrics["interrupted"]`)
 
 
 def check_supported(mission: Mission) -> None:
@@ -42,22 +45,38 @@ def check_supported(mission: Mission) -> None:
 
 
 def simulate(mission: Mission, seed: int | None = None, out: str | Path | None = None, plots: bool = True,
-             progress: bool = False, dt: float = 0.2, record_stereo: bool = False) -> RunResult:
-    """Run `mission` in its world with a simulated vehicle; with `out`, write the run folder there (and with
-    `record_stereo`, the stereo stream in `out/stereo/`, KITTI layout: `mission.sim.stereo_record`)."""
+             progress: bool = False, dt: float = 0.2, record_stereo: bool = False, force: bool = False,
+             signals: bool = False) -> RunResult:
+    """Run `mission` in its world with a simulated vehicle; with `out`, write the run folder there (claimed and
+    locked for the run: `mission.runlock`; `force` replaces an earlier run's folder), and with `record_stereo`, the
+    stereo stream in `out/stereo/` (KITTI layout: `mission.sim.stereo_record`).
+
+    The trajectory and the events are written as the run goes; `metrics.json`, then the `mission_finished` event,
+    end the folder. With `signals`, SIGINT/SIGTERM stop the run cleanly (`mission.interrupt`): the folder gets an
+    `interrupted` event and `metrics.json` with `"interrupted": true`, and `RunResult.signal` says which signal; a
+    second signal raises `Interrupted` after writing the same."""
     check_supported(mission)
     if mission.world is None:
         raise AuvError(f"mission '{mission.name}' names no world; simulation needs `world:`")
     if record_stereo and out is None:
         raise AuvError("recording the stereo stream needs a run folder (`out`)")
     seed = mission.seed if seed is None else seed
-    scene = build_scene(load_world(mission.world))
-    vehicle = SimulatedVehicle(mission, scene, seed, dt)
-    out_dir = Path(out) if out is not None else None
-    if out_dir is not None:
-        from mission.runfolder import prepare_run_folder
+    with stop_on_signals(None, install=signals) as stop:
+        scene = build_scene(load_world(mission.world))
+        vehicle = SimulatedVehicle(mission, scene, seed, dt)
+        out_dir = Path(out) if out is not None else None
+        lock = prepare_run_folder(out_dir, mission, seed, force=force) if out_dir is not None else None
+        try:
+            return _run(mission, seed, vehicle, scene, out_dir, stop, plots, progress, record_stereo)
+        finally:
+            if lock is not None:
+                lock.release()
 
-        prepare_run_folder(out_dir, mission, seed)
+
+def _run(mission: Mission, seed: int, vehicle: SimulatedVehicle, scene: Scene, out_dir: Path | None,
+         stop: SignalStop, plots: bool, progress: bool, record_stereo: bool) -> RunResult:
+    writer = TrajectoryWriter(out_dir / "trajectory.csv") if out_dir is not None else None
+    vehicle.row_sink = writer.write if writer is not None else None
     recorder = None
     if record_stereo and out_dir is not None:
         from mission.sim.stereo_record import record_vehicle_stereo
@@ -65,8 +84,12 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
         recorder = record_vehicle_stereo(vehicle, out_dir / "stereo")
     log = EventLog(out_dir / "events.jsonl" if out_dir else None)
     bar = _progress_bar(mission) if progress else None
+    finished: dict[str, Any] = {}  # the executive's mission_finished: logged once the results are written
 
     def emit(event: str, t: float, **fields: Any) -> None:
+        if event == "mission_finished":
+            finished.update(time=t, **fields)
+            return
         if event == "element_started":
             vehicle.element = str(fields.get("element", ""))
         log.emit(event, t, **fields)
@@ -77,35 +100,79 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
         if bar is not None and int(nav.time) > bar.n:
             bar.update(int(nav.time) - bar.n)
 
+    vehicle.on_event = emit
     wall0 = time.perf_counter()
     host: PluginHost | None = None
+    executive: Executive | None = None
     try:
-        host = PluginHost(mission.plugins.model_dump(), plugin_settings(mission), emit, simulated_clock=True) \
-            if any(mission.plugins.model_dump().values()) else None
-        from mission.artifacts import Artifacts
+        try:
+            host = PluginHost(mission.plugins.model_dump(), plugin_settings(mission), emit, simulated_clock=True) \
+                if any(mission.plugins.model_dump().values()) else None
+            from mission.artifacts import Artifacts
 
-        report = Executive(mission, vehicle, emit, on_tick=tick, plugins=host, artifacts=Artifacts(out_dir)).run()
-    finally:
-        if host is not None:
-            host.close()  # the workers go, whatever ended the run
+            executive = Executive(mission, vehicle, emit, on_tick=tick, plugins=host, artifacts=Artifacts(out_dir))
+            stop.target = executive.request_stop
+            report = executive.run()
+            stop.target = None
+        finally:
+            stop.closing = True  # what follows writes the folder's end: later signals wait for it
+            if host is not None:
+                host.close()  # the workers go, whatever ended the run
+            if recorder is not None:
+                recorder.close()
+            if bar is not None:
+                bar.close()
+        metrics = run_metrics(mission.name, seed, report, vehicle, scene, time.perf_counter() - wall0)
+        if stop.signum is not None:
+            metrics.update(interrupted=True, signal=signal_name(stop.signum))
+        if out_dir is not None and writer is not None:
+            from mission.runfolder import write_run_results
+            from mission.sim.photos import write_photos
+
+            writer.close()
+            write_photos(out_dir, report.knowledge, vehicle)  # photo surveys' pairs: photos/, out of the maps
+            if stop.signum is not None:
+                log.emit("interrupted", vehicle.truth.time, signal=signal_name(stop.signum))
+            write_run_results(out_dir, metrics, None, vehicle.log.fixes, report.knowledge)
+        log.emit("mission_finished", finished.pop("time", vehicle.truth.time), **finished)
+    except Interrupted as exc:
+        stop.closing = True
+        _write_interrupted(mission, seed, executive, vehicle, scene, out_dir, writer, log, exc.signum, wall0)
         log.close()
-        if recorder is not None:
-            recorder.close()
-        if bar is not None:
-            bar.close()
-    wall = time.perf_counter() - wall0
-    metrics = run_metrics(mission.name, seed, report, vehicle, scene, wall)
-    if out_dir is not None:
+        raise
+    finally:
+        if writer is not None:
+            writer.close()
+        log.close()
+    stop.closing = False
+    if out_dir is not None and plots:
+        from mission.plots import plot_run
+
+        plot_run(out_dir)
+    return RunResult(metrics, report, vehicle, scene, out_dir, stop.signum)
+
+
+def _write_interrupted(mission: Mission, seed: int, executive: Executive | None, vehicle: SimulatedVehicle,
+                       scene: Scene, out_dir: Path | None, writer: TrajectoryWriter | None, log: EventLog,
+                       signum: int, wall0: float) -> None:
+    """A run cut short at once: what is known so far, marked interrupted, and the end of the event log."""
+    report = executive.report if executive is not None else ExecutionReport()
+    report.end_time = vehicle.truth.time
+    try:
+        metrics = run_metrics(mission.name, seed, report, vehicle, scene, time.perf_counter() - wall0)
+    except Exception as exc:  # noqa: BLE001 - a report cut mid-element may lack figures; the head still matters
+        metrics = {"mission": mission.name, "seed": seed, "metrics_error": f"{type(exc).__name__}: {exc}",
+                   "mission_time_s": round(vehicle.truth.time, 2), "distance_m": round(vehicle.distance_m, 2),
+                   "energy_wh": round(vehicle.energy_used_wh, 2)}
+    metrics.update(completed=False, aborted=True, interrupted=True, signal=signal_name(signum))
+    log.emit("interrupted", vehicle.truth.time, signal=signal_name(signum))
+    if out_dir is not None and writer is not None:
         from mission.runfolder import write_run_results
-        from mission.sim.photos import write_photos
 
-        write_photos(out_dir, report.knowledge, vehicle)  # photo surveys' pairs: photos/, out of the maps
-        write_run_results(out_dir, metrics, vehicle.log.rows, vehicle.log.fixes, report.knowledge)
-        if plots:
-            from mission.plots import plot_run
-
-            plot_run(out_dir)
-    return RunResult(metrics, report, vehicle, scene, out_dir)
+        writer.close()
+        write_run_results(out_dir, metrics, None, vehicle.log.fixes, report.knowledge)
+    log.emit("mission_finished", vehicle.truth.time, completed=False, aborted=True, interrupted=True,
+             reason=f"interrupted by {signal_name(signum)}")
 
 
 def _progress_bar(mission: Mission) -> Any:

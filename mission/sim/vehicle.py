@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import random
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -17,6 +18,7 @@ from mission.navigation import NavigationFilter
 from mission.plugin_api import StereoImages
 from mission.runfolder import TRAJECTORY_COLUMNS as TRAJECTORY_COLUMNS
 from mission.sim import kinematics
+from mission.sim.faults import DVL_LOST_DRIFT_M_S, ActiveFaults, EmitFn, degraded, restamp
 from mission.sim.kinematics import TrueState
 from mission.vehicle import (
     HOVER_GAIN,
@@ -95,6 +97,10 @@ class SimulatedVehicle:
         self.frame_rate_hz = mission.sensors.stereo.rate_hz if mission.sensors.stereo is not None else 1.0
         self.frame_sink: Any = None  # called as sink(images, true T_world_left) with each pair (stereo recording)
         self.log = SimLog()
+        self.faults = ActiveFaults(mission.faults, mission.vehicle.energy_wh)
+        self.on_event: EmitFn | None = None  # the runner's event log: fault_started / fault_ended
+        self.row_sink: Callable[[tuple[object, ...]], None] | None = None  # each log row as it is made (streaming)
+        self._last_output: dict[str, Any] = {}  # each payload sensor's last output (what a frozen one repeats)
         self._measure()
 
     # -- sensors ---------------------------------------------------------------------------------------------
@@ -107,8 +113,8 @@ class SimulatedVehicle:
         self.heading_meas = (t.heading + self.rng.gauss(0.0, HEADING_SIGMA_DEG)) % 360.0
         self.depth_meas = max(t.depth + self.rng.gauss(0.0, DEPTH_SIGMA_M), 0.0)
         alt = self.true_altitude()
-        self.altitude_meas = alt + self.rng.gauss(0.0, ALTITUDE_SIGMA_M) if 0.0 < alt <= self.dvl_max_altitude \
-            else None
+        self.altitude_meas = alt + self.rng.gauss(0.0, ALTITUDE_SIGMA_M) \
+            if 0.0 < alt <= self.dvl_max_altitude and not self.faults.dvl_out else None
 
     def _dvl_velocity_world(self) -> tuple[float, float]:
         """Velocity over ground as the DVL measures it (body frame, biased), rotated by the measured heading."""
@@ -223,9 +229,43 @@ class SimulatedVehicle:
         own = self.mission.sensors.stereo.rate_hz if self.mission.sensors.stereo is not None else 1.0
         self.frame_rate_hz = own if rate_hz is None else min(max(rate_hz, 1e-3), own)
 
+    def _sense_payload(self) -> None:
+        """The payload sensors due now: each measures, or, lost or frozen, delivers nothing or its last output."""
+        f = self.filter
+        for key, device, pending, sense, due in (
+                ("mbes", self.mbes, self.pending_pings, self._ping, "next_ping"),
+                ("stereo", self.camera, self.pending_frames, self._capture, "next_frame"),
+                ("scanner", self.scanner, self.pending_scans, self._scan, "next_scan")):
+            if device is None or key not in self.payload:
+                continue
+            if key not in self.faults.lost | self.faults.frozen:
+                sense()
+                self._last_output.update({key: pending[-1]} if pending else {})
+            elif self.truth.time + 1e-9 >= getattr(self, due):
+                last = self._last_output.get(key)
+                if key in self.faults.frozen and last is not None:  # re-stamped, sonar and scans re-tagged
+                    tags = {} if key == "stereo" else {"north": f.north, "east": f.east, "depth": self.depth_meas,
+                                                       "heading": self.heading_meas, "position_sigma": f.sigma}
+                    pending.append(restamp(last, self.truth.time, **tags))
+                period = 1.0 / (self.mbes.effective_rate_hz if key == "mbes" else self.frame_rate_hz) \
+                    if key != "scanner" else self.scanner.period_s
+                setattr(self, due, self.truth.time + period)
+
+    def _dead_reckon(self, dt: float) -> None:
+        """The navigation's prediction: on the DVL, or without it on the propeller's speed through the water."""
+        if not self.faults.dvl_out:
+            self.filter.predict(*self._dvl_velocity_world(), dt)
+            return
+        h = math.radians(self.heading_meas)
+        self.filter.predict(self.truth.speed * math.cos(h), self.truth.speed * math.sin(h), dt)
+        grown = self.filter.sigma + DVL_LOST_DRIFT_M_S * dt
+        self.filter.var = grown * grown
+
     def advance(self) -> None:
         dt = self.control_period
-        cmd, t, v = self.command, self.truth, self.mission.vehicle
+        self.energy_used_wh += self.faults.update(self.truth.time, self.on_event)
+        fraction = self.faults.thrust_fraction
+        cmd, t, v = self.command, self.truth, degraded(self.mission.vehicle, fraction)
         if cmd.altitude is not None and self.altitude_meas is not None:
             depth_cmd = self.depth_meas + (self.altitude_meas - cmd.altitude)
         else:
@@ -234,7 +274,7 @@ class SimulatedVehicle:
         hover = None
         if cmd.station is not None:  # station keeping on the estimate
             en, ee = cmd.station[0] - self.filter.north, cmd.station[1] - self.filter.east
-            gain = min(HOVER_GAIN, STATION_KEEPING_SPEED_M_S / max(math.hypot(en, ee), 1e-9))
+            gain = min(HOVER_GAIN, STATION_KEEPING_SPEED_M_S / max(math.hypot(en, ee), 1e-9)) * fraction
             hover = (gain * en, gain * ee)
         kinematics.step(t, cmd.heading, cmd.speed, depth_cmd, self.heading_meas, self.depth_meas, v,
                         self.scene.current, dt, hover)
@@ -243,26 +283,23 @@ class SimulatedVehicle:
             t.depth = floor
             self.log.seabed_contacts += 1
         self.distance_m += math.sqrt((t.north - n0) ** 2 + (t.east - e0) ** 2 + (t.depth - d0) ** 2)
-        ratio = t.speed / v.cruise_speed
+        ratio = t.speed / self.mission.vehicle.cruise_speed
         self.energy_used_wh += (v.hotel_power_w + v.propulsion_power_w * ratio * ratio * ratio) * dt / 3600.0
         self._measure()
-        vn, ve = self._dvl_velocity_world()
-        self.filter.predict(vn, ve, dt)
+        self._dead_reckon(dt)
         if t.time >= self.next_fix - 1e-9:
             self.next_fix += self.usbl_period
-            self._usbl()
-        if self.mbes is not None and "mbes" in self.payload:
-            self._ping()
-        if self.camera is not None and "stereo" in self.payload:
-            self._capture()
-        if self.scanner is not None and "scanner" in self.payload:
-            self._scan()
+            if not self.faults.usbl_out:
+                self._usbl()
+        self._sense_payload()
         self.record()
 
     def record(self) -> None:
         t, f = self.truth, self.filter
-        self.log.rows.append((
-            t.time, t.north, t.east, t.depth, t.heading, self.true_altitude(),
-            f.north, f.east, self.depth_meas, self.heading_meas,
-            self.altitude_meas if self.altitude_meas is not None else math.nan,
-            f.sigma, t.speed, self.energy_used_wh, self.element))
+        row = (t.time, t.north, t.east, t.depth, t.heading, self.true_altitude(),
+               f.north, f.east, self.depth_meas, self.heading_meas,
+               self.altitude_meas if self.altitude_meas is not None else math.nan,
+               f.sigma, t.speed, self.energy_used_wh, self.element)
+        self.log.rows.append(row)
+        if self.row_sink is not None:
+            self.row_sink(row)
