@@ -66,10 +66,9 @@ def _inside(path: Path, folder: Path) -> bool:
     return path == folder or folder in path.parents
 
 
-def _refuse_protected(out: Path, protected: Sequence[tuple[str, Path]]) -> None:
+def _refuse_protected(out: Path, resolved_out: Path, protected: Sequence[tuple[str, Path]]) -> None:
     for what, path in protected:
-        resolved = path.resolve()
-        if _inside(resolved.parent, out):
+        if _inside(path.resolve().parent, resolved_out):
             raise RunFolderError(f"{out}: holds the {what} ({path}); a run folder must be a folder of its own")
 
 
@@ -88,7 +87,7 @@ def claim_run_folder(out: str | Path, kind: str, protected: Sequence[tuple[str, 
 
 
 def _claim(out: Path, resolved: Path, kind: str, protected: Sequence[tuple[str, Path]], force: bool) -> RunLock:
-    _refuse_protected(resolved, protected)
+    _refuse_protected(out, resolved, protected)
     for parent in resolved.parents:
         if parent.exists() and not parent.is_dir():
             raise RunFolderError(f"{out}: {parent} is a file, not a folder")

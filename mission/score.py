@@ -16,7 +16,7 @@ import numpy as np
 
 from mission.errors import RunFolderError
 from mission.events import read_events
-from mission.runfolder import TRAJECTORY_COLUMNS, read_csv, write_metrics, write_trajectory
+from mission.runfolder import TRAJECTORY_COLUMNS, check_complete, read_csv, write_metrics, write_trajectory
 from mission.scoring import ElementSpan, navigation_errors, path_length, resample, track_metrics
 
 CONTACT_ALTITUDE_M = 1e-3  # the simulator clamps the vehicle onto the seabed: a true altitude this low is contact
@@ -43,6 +43,7 @@ def score_run(run_dir: str | Path, truth_dir: str | Path) -> dict[str, Any]:
     """Score the run folder against the truth folder; rewrites its trajectory.csv and metrics.json and returns
     the metrics."""
     run_dir, truth_dir = Path(run_dir), Path(truth_dir)
+    check_complete(run_dir)
     for folder, name in ((run_dir, "metrics.json"), (run_dir, "trajectory.csv"), (run_dir, "events.jsonl"),
                          (truth_dir, "trajectory.csv")):
         if not (folder / name).is_file():
