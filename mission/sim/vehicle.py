@@ -263,7 +263,7 @@ class SimulatedVehicle:
 
     def advance(self) -> None:
         dt = self.control_period
-        self.energy_used_wh += self.faults.update(self.truth.time, self.on_event)
+        self.energy_used_wh += self.faults.update(self.truth.time + dt, self.on_event)  # acting over this step
         fraction = self.faults.thrust_fraction
         cmd, t, v = self.command, self.truth, degraded(self.mission.vehicle, fraction)
         if cmd.altitude is not None and self.altitude_meas is not None:
