@@ -32,7 +32,6 @@ def _run(args: argparse.Namespace) -> int:
     result = run_onboard(mission, args.vehicle, out, connect_timeout=args.connect_timeout, force=args.force)
     m = result.metrics
     state = "completed" if m["completed"] else ("LINK LOST" if m["link_lost"] else
-                                                "INTERRUPTED" if m.get("interrupted") else
                                                 "STOPPED" if m["stopped"] else
                                                 "ABORTED: " + (m["abort_reason"] or "") if m["aborted"]
                                                 else "not completed")

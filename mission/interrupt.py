@@ -45,7 +45,7 @@ class SignalStop:
 
     @property
     def reason(self) -> str:
-        return f"interrupted by {signal.Signals(self.signum).name}" if self.signum is not None else ""
+        return f"stopped by {signal.Signals(self.signum).name}" if self.signum is not None else ""
 
     def handle(self, signum: int, frame: FrameType | None) -> None:
         first = self.signum is None

@@ -9,7 +9,9 @@ from mission.language import validate_mission_file
 from mission.sim.run import check_supported
 
 ALL = sorted(MISSIONS.glob("*.yaml"))
-EXPECTED_ABORT = {"geofence_abort.yaml", "duration_abort.yaml"}
+EXPECTED_ABORT = {"geofence_abort.yaml", "duration_abort.yaml", "fault_battery.yaml"}
+# a frozen, then lost multibeam costs the survey coverage and detections (on purpose: see the README's fault campaign)
+DEGRADED_SURVEY = {"fault_multibeam.yaml"}
 WARNED = {"geofence_abort.yaml"}  # validation warns that its leg crosses the notch of its fence
 OCCLUDED_SET = {"manifold_inspection_tarp.yaml": "skid-east"}  # a tarpaulin hides it in that world
 # ... and stands 0.25 m above the valve panels, so the altimeter forbids their viewpoints' depth (photos say so)
@@ -42,7 +44,7 @@ def test_mission_validates_and_simulates(path, tmp_path):
         assert (tmp_path / "run" / name).is_file(), name
     # Surveys of the reference world find every object >= 1 m tall within 2 m, with no false alarm.
     for element in m["elements"]:
-        if element["kind"] == "survey":
+        if element["kind"] == "survey" and path.name not in DEGRADED_SURVEY:
             assert element["missed"] == [] and element["false_alarms"] == 0
             assert all(d["position_error_m"] <= 2.0 for d in element["detections"])
             assert element["coverage_percent"] >= 99.0

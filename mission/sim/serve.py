@@ -108,13 +108,12 @@ def serve(mission: Mission, address: str | Sequence[str], seed: int | None = Non
     stop = stop_event or threading.Event()
     vehicle = SimulatedVehicle(mission, build_scene(load_world(mission.world)), seed, dt)
     out_dir = Path(out) if out is not None else None
-    truth = events = None
+    truth = events = lock = None
     if out_dir is not None:
         from mission.runfolder import prepare_run_folder
         from mission.sim.truth_log import TruthLog
 
-        prepare_run_folder(out_dir, mission, seed)
-        (out_dir / "autopilot.jsonl").unlink(missing_ok=True)
+        lock = prepare_run_folder(out_dir, mission, seed, kind="auv sim serve")  # held while serving
         truth = TruthLog(out_dir)
         events = EventLog(out_dir / "autopilot.jsonl")
     vehicle.log.rows.clear()
@@ -164,6 +163,8 @@ def serve(mission: Mission, address: str | Sequence[str], seed: int | None = Non
             truth.close()
         if events is not None:
             events.close()
+        if lock is not None:
+            lock.release()
     summary.sim_time = vehicle.truth.time
     summary.wall_time = time.monotonic() - wall0
     return summary

@@ -82,15 +82,15 @@ def rows(path: Path) -> list[dict[str, str]]:
 
 def test_serve_writes_the_truth_as_it_goes(mission: Mission, tmp_path: Path) -> None:
     port = free_udp_port()
-    with ServedVehicle(mission, f"udpout:127.0.0.1:{port}", speedup=10, out=tmp_path):
+    with ServedVehicle(mission, f"udpout:127.0.0.1:{port}", speedup=10, out=tmp_path / "truth"):
         time.sleep(1.5)
-        during = rows(tmp_path / "trajectory.csv")  # read while serving: flushed within FLUSH_PERIOD
-    after = rows(tmp_path / "trajectory.csv")
-    assert (tmp_path / "mission.yaml").is_file() and (tmp_path / "world.yaml").is_file()
+        during = rows(tmp_path / "truth" / "trajectory.csv")  # read while serving: flushed within FLUSH_PERIOD
+    after = rows(tmp_path / "truth" / "trajectory.csv")
+    assert (tmp_path / "truth" / "mission.yaml").is_file() and (tmp_path / "truth" / "world.yaml").is_file()
     assert float(during[-1]["time"]) > 3.0  # on disk while serving (1.5 s of wall time at 10x, less a flush)
     times = [float(r["time"]) for r in after]
     assert times == pytest.approx([0.2 * (k + 1) for k in range(len(times))], abs=1e-3)
-    assert rows(tmp_path / "usbl.csv")  # the acoustic fixes, every 2 s of vehicle time
+    assert rows(tmp_path / "truth" / "usbl.csv")  # the acoustic fixes, every 2 s of vehicle time
 
 
 def test_the_gcs_failsafe_disarms_the_vehicle_when_the_gcs_heartbeat_stops(mission: Mission) -> None:
@@ -133,7 +133,7 @@ def test_a_set_mode_message_is_acknowledged_and_changes_the_mode(mission: Missio
 
 def test_setpoints_outside_guided_are_ignored_and_the_vehicle_holds(mission: Mission, tmp_path: Path) -> None:
     port = free_udp_port()
-    with ServedVehicle(mission, f"udpout:127.0.0.1:{port}", speedup=20, out=tmp_path):
+    with ServedVehicle(mission, f"udpout:127.0.0.1:{port}", speedup=20, out=tmp_path / "truth"):
         gcs = Gcs(port)
         try:
             gcs.arm_in(POSHOLD)
@@ -144,7 +144,7 @@ def test_setpoints_outside_guided_are_ignored_and_the_vehicle_holds(mission: Mis
                 time.sleep(0.05)
         finally:
             gcs.close()
-    last = rows(tmp_path / "trajectory.csv")[-1]
+    last = rows(tmp_path / "truth" / "trajectory.csv")[-1]
     assert abs(float(last["north"])) < 1.5 and abs(float(last["east"])) < 1.5  # POSHOLD: held against the current
 
 
