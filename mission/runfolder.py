@@ -6,9 +6,12 @@
                           its true columns stay empty until `auv score` fills them from the simulator's)
     DIR/usbl.csv          acoustic fixes: time, north, east, used, accepted
     DIR/events.jsonl      events, flushed as they happened
-    DIR/metrics.json      the run's metrics
+    DIR/metrics.json      the run's metrics, written last: the folder's end marker (`check_complete`)
     DIR/maps/ELEMENT.npz  maps an element built (survey: depth, info, north0, east0, cell, lines)
     DIR/plots/*.png       figures (`auv plot DIR` redraws them)
+    DIR/.auv-run          the marker, locked while a run writes the folder (`mission.runlock`)
+
+Files written at the end are written whole or not at all (`write_atomic`); an `OSError` becomes `RunFolderError`.
 """
 
 from __future__ import annotations

@@ -76,6 +76,7 @@ def run_summary(metrics: dict[str, Any]) -> dict[str, Any]:
         "seed": metrics["seed"],
         "completed": metrics["completed"],
         "aborted": metrics["aborted"],
+        "interrupted": metrics.get("interrupted", False),
         "abort_reason": metrics.get("abort_reason"),
         "mission_time_s": metrics["mission_time_s"],
         "wall_time_s": metrics["wall_time_s"],
