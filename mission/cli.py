@@ -65,7 +65,7 @@ def _simulate(args: argparse.Namespace) -> int:
         return _campaign(args, mission.name)
     out = Path(args.out) if args.out else Path("runs") / mission.name
     result = simulate(mission, seed=args.seed, out=out, plots=not args.no_plots, progress=not args.quiet,
-                      record_stereo=args.record_stereo)
+                      record_stereo=args.record_stereo, plugin_latency_s=args.plugin_latency)
     m = result.metrics
     state = "completed" if m["completed"] else ("ABORTED: " + (m["abort_reason"] or "") if m["aborted"]
                                                  else "not completed")
@@ -80,6 +80,18 @@ def _simulate(args: argparse.Namespace) -> int:
         pairs = len(result.vehicle.log.frames)
         print(f"stereo stream: {pairs} pair(s) in {out / 'stereo'} (KITTI layout; `auv vo {out / 'stereo'}`)")
     return 0 if m["completed"] else 1
+
+
+def _latency(text: str) -> float | None:
+    if text == "measured":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is neither a number of seconds nor 'measured'") from None
+    if not 0.0 <= value <= 60.0:
+        raise argparse.ArgumentTypeError(f"{value:g} s is outside 0-60 s")
+    return value
 
 
 def _campaign(args: argparse.Namespace, name: str) -> int:
@@ -100,7 +112,8 @@ def _campaign(args: argparse.Namespace, name: str) -> int:
         print(f"  seed {row['seed']:>5}  {state:<13} {row['mission_time_s']:7.0f} s  wall {row['wall_time_s']:6.0f} s"
               + (f"  failed: {', '.join(failed)}" if failed else ""), flush=True)
 
-    report = run_campaign(args.mission, seeds, out, jobs=args.jobs, plots=not args.no_plots, on_run=line)
+    report = run_campaign(args.mission, seeds, out, jobs=args.jobs, plots=not args.no_plots, on_run=line,
+                          plugin_latency_s=args.plugin_latency)
     s = report["summary"]
     print(f"completed {s['completed']}/{s['runs']} ({s['completed_percent']:g} %), aborted {s['aborted']}, "
           f"crashed {s['crashed']}, safety violations {s['safety_violations']}")
@@ -233,6 +246,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.add_argument("--record-stereo", action="store_true",
                    help="write the stereo stream and true poses to DIR/stereo/ (KITTI odometry layout)")
+    p.add_argument("--plugin-latency", type=_latency, default=0.1, metavar="S|measured",
+                   help="each perception plug-in call's latency charged to the simulated clock (default 0.1 s: "
+                   "runs repeat exactly for a seed); 'measured': the call's CPU time, so the run depends on the "
+                   "machine")
     p.set_defaults(func=_simulate)
 
     p = sub.add_parser("plot", help="redraw a run folder's figures from its files")
