@@ -14,6 +14,7 @@ from mission.executive import ExecutionReport, Executive
 from mission.interrupt import Interrupted, SignalStop, signal_name, stop_on_signals
 from mission.language.loader import load_world
 from mission.language.models import Mission
+from mission.plugin_calls import SIMULATED_LATENCY_S
 from mission.plugin_host import PluginHost
 from mission.plugin_settings import plugin_settings
 from mission.runfolder import TrajectoryWriter, prepare_run_folder
@@ -44,8 +45,12 @@ def check_supported(mission: Mission) -> None:
             f"(used by {where}); supported: {', '.join(sorted(REGISTRY))}")
 
 
+DEFAULT_PLUGIN_LATENCY_S = SIMULATED_LATENCY_S
+
+
 def simulate(mission: Mission, seed: int | None = None, out: str | Path | None = None, plots: bool = True,
-             progress: bool = False, dt: float = 0.2, record_stereo: bool = False, force: bool = False,
+             progress: bool = False, dt: float = 0.2, record_stereo: bool = False,
+             plugin_latency_s: float | None = DEFAULT_PLUGIN_LATENCY_S, force: bool = False,
              signals: bool = False) -> RunResult:
     """Run `mission` in its world with a simulated vehicle; with `out`, write the run folder there (claimed and
     locked for the run: `mission.runlock`; `force` replaces an earlier run's folder), and with `record_stereo`, the
@@ -54,7 +59,11 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
     The trajectory and the events are written as the run goes; `metrics.json`, then the `mission_finished` event,
     end the folder. With `signals`, SIGINT/SIGTERM stop the run cleanly (`mission.interrupt`): the folder gets an
     `interrupted` event and `metrics.json` with `"interrupted": true`, and `RunResult.signal` says which signal; a
-    second signal raises `Interrupted` after writing the same."""
+    second signal raises `Interrupted` after writing the same.
+
+    Perception plug-ins run in worker processes and each call's latency is charged to the simulated clock:
+    `plugin_latency_s` per call (a run then repeats exactly for its seed), or with None the call's measured CPU
+    time (closer to this plug-in's cost, but the run depends on the machine and its load)."""
     check_supported(mission)
     if mission.world is None:
         raise AuvError(f"mission '{mission.name}' names no world; simulation needs `world:`")
@@ -67,14 +76,16 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
         out_dir = Path(out) if out is not None else None
         lock = prepare_run_folder(out_dir, mission, seed, force=force) if out_dir is not None else None
         try:
-            return _run(mission, seed, vehicle, scene, out_dir, stop, plots, progress, record_stereo)
+            return _run(mission, seed, vehicle, scene, out_dir, stop, plots, progress, record_stereo,
+                        plugin_latency_s)
         finally:
             if lock is not None:
                 lock.release()
 
 
 def _run(mission: Mission, seed: int, vehicle: SimulatedVehicle, scene: Scene, out_dir: Path | None,
-         stop: SignalStop, plots: bool, progress: bool, record_stereo: bool) -> RunResult:
+         stop: SignalStop, plots: bool, progress: bool, record_stereo: bool,
+         plugin_latency_s: float | None) -> RunResult:
     writer = TrajectoryWriter(out_dir / "trajectory.csv") if out_dir is not None else None
     vehicle.row_sink = writer.write if writer is not None else None
     recorder = None
@@ -106,8 +117,8 @@ def _run(mission: Mission, seed: int, vehicle: SimulatedVehicle, scene: Scene, o
     executive: Executive | None = None
     try:
         try:
-            host = PluginHost(mission.plugins.model_dump(), plugin_settings(mission), emit, simulated_clock=True) \
-                if any(mission.plugins.model_dump().values()) else None
+            host = PluginHost(mission.plugins.model_dump(), plugin_settings(mission), emit, simulated_clock=True,
+                              latency_s=plugin_latency_s) if any(mission.plugins.model_dump().values()) else None
             from mission.artifacts import Artifacts
 
             executive = Executive(mission, vehicle, emit, on_tick=tick, plugins=host, artifacts=Artifacts(out_dir))
@@ -123,6 +134,8 @@ def _run(mission: Mission, seed: int, vehicle: SimulatedVehicle, scene: Scene, o
             if bar is not None:
                 bar.close()
         metrics = run_metrics(mission.name, seed, report, vehicle, scene, time.perf_counter() - wall0)
+        if host is not None:
+            metrics["plugins"] = host.stats()
         if stop.signum is not None:
             metrics.update(interrupted=True, signal=signal_name(stop.signum))
         if out_dir is not None and writer is not None:
