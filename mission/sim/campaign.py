@@ -14,6 +14,7 @@ import re
 import traceback
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import Any
 
@@ -137,6 +138,14 @@ def _run_one(mission_path: str, seed: int, out: str, plots: bool,
     return run_summary(result.metrics)
 
 
+def _result(future: Future[dict[str, Any]], seed: int, out_dir: Path) -> dict[str, Any]:
+    """A worker's row; when its process died (killed, out of memory), a row saying that its folder is incomplete."""
+    try:
+        return future.result()
+    except BrokenProcessPool as exc:
+        return {"seed": seed, "error": f"the run's process died ({exc}); {out_dir / f'seed-{seed}'} is incomplete"}
+
+
 def run_campaign(mission_path: str | Path, seeds: Sequence[int], out: str | Path, jobs: int = 1,
                  plots: bool = False, on_run: Callable[[dict[str, Any]], None] | None = None,
                  plugin_latency_s: float | None = SIMULATED_LATENCY_S, force: bool = False) -> dict[str, Any]:
@@ -171,12 +180,13 @@ def _campaign(mission_path: str | Path, seeds: Sequence[int], out_dir: Path, job
         # spawn: a forked child would inherit the parent's MuJoCo/OpenGL state
         ctx = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
-            pending: set[Future[dict[str, Any]]] = {
-                pool.submit(_run_one, str(mission_path), s, str(out_dir / f"seed-{s}"), plots, plugin_latency_s)
+            seed_of: dict[Future[dict[str, Any]], int] = {
+                pool.submit(_run_one, str(mission_path), s, str(out_dir / f"seed-{s}"), plots, plugin_latency_s): s
                 for s in seeds}
+            pending = set(seed_of)
             while pending:
                 finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                 for f in finished:
-                    record(f.result())
+                    record(_result(f, seed_of[f], out_dir))
     report: dict[str, Any] = json.loads(report_path.read_text())
     return report

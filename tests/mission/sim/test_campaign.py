@@ -61,3 +61,34 @@ def test_seeds_refuses_a_single_seed_too(tmp_path, capsys):
     code = main(["simulate", str(MISSIONS / "field_transit.yaml"), "--seeds", "1-2", "--seed", "3", "--out",
                  str(tmp_path / "x")])
     assert code != 0 and "--seeds" in capsys.readouterr().err
+
+
+def test_a_killed_run_is_recorded_as_incomplete_and_the_campaign_ends_without_a_traceback(tmp_path):
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from conftest import WORLD
+
+    legs = "".join(f"\n  - {{id: leg{k}, transit: {{to: {{north: {250 * (k % 2)}, east: 0}}, depth: 30}}}}"
+                   for k in range(20))  # ~3,400 s simulated: a few seconds
+    mission = tmp_path / "long.yaml"
+    mission.write_text(f"name: long\nworld: {WORLD}\nsensors: {{usbl: {{sigma: 1.5}}}}\n"
+                       f"safety: {{max_duration: 20h}}\nvehicle: {{energy_wh: 100000}}\nroute:{legs}\n")
+    out = tmp_path / "campaign"
+    proc = subprocess.Popen([sys.executable, "-m", "mission", "simulate", str(mission), "--seeds", "1-2", "--jobs",
+                             "2", "--no-plots", "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    marker = out / "seed-1" / ".auv-run"
+    deadline = time.monotonic() + 90
+    while time.monotonic() < deadline and not (marker.is_file() and marker.read_text().strip()):
+        time.sleep(0.05)
+    os.kill(json.loads(marker.read_text())["pid"], signal.SIGKILL)  # the worker running seed 1
+    stdout, stderr = proc.communicate(timeout=90)
+    assert proc.returncode == 1 and "Traceback" not in stderr, stderr
+    report = json.loads((out / "campaign.json").read_text())
+    row = next(r for r in report["runs"] if r["seed"] == 1)
+    assert row["error"].startswith("the run's process died") and row["error"].endswith("seed-1 is incomplete")
+    assert "CRASHED" in stdout and report["summary"]["crashed"] >= 1
