@@ -94,6 +94,7 @@ def _sim_serve(args: argparse.Namespace) -> int:
         print(f"  t={event['time']:9.1f} s  {event['event']} {fields}", flush=True)
 
     summary = serve(mission, args.mavlink, seed=seed, speedup=args.speedup, out=args.out, stop_event=stop,
+                    force=args.force,
                     on_event=None if args.quiet else show)
     print(f"stopped: {summary.sim_time:.1f} s of vehicle time in {summary.wall_time:.1f} s "
           f"({summary.steps} steps)", flush=True)
@@ -111,6 +112,7 @@ def _add_sim_parser(sub: Any) -> None:
     p.add_argument("--seed", type=int, help="random seed (default: the mission's)")
     p.add_argument("--out", help="write the truth here as it goes (mission.yaml, world.yaml, trajectory.csv, "
                    "usbl.csv, autopilot.jsonl)")
+    p.add_argument("--force", action="store_true", help="replace an earlier truth folder whole")
     p.add_argument("-q", "--quiet", action="store_true", help="do not print the autopilot's events")
     p.set_defaults(func=_sim_serve)
 # -- end of `auv sim serve` ------------------------------------------------------------------------------------

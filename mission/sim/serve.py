@@ -97,7 +97,7 @@ def _send(conn: Any, name: str, *args: Any) -> None:
 def serve(mission: Mission, address: str | Sequence[str], seed: int | None = None, speedup: float = 1.0,
           out: str | Path | None = None, stop_event: threading.Event | None = None,
           gcs_timeout: float = FS_GCS_TIMEOUT, dt: float = 0.2,
-          on_event: Callable[[dict[str, Any]], None] | None = None) -> ServeSummary:
+          on_event: Callable[[dict[str, Any]], None] | None = None, force: bool = False) -> ServeSummary:
     """Serve `mission`'s simulated vehicle on `address` (one pymavlink connection string or several) until
     `stop_event` is set; returns what happened. `on_event` sees each autopilot event as it happens."""
     if mission.world is None:
@@ -113,7 +113,7 @@ def serve(mission: Mission, address: str | Sequence[str], seed: int | None = Non
         from mission.runfolder import prepare_run_folder
         from mission.sim.truth_log import TruthLog
 
-        lock = prepare_run_folder(out_dir, mission, seed, kind="auv sim serve")  # held while serving
+        lock = prepare_run_folder(out_dir, mission, seed, force=force, kind="auv sim serve")  # held while serving
         truth = TruthLog(out_dir)
         events = EventLog(out_dir / "autopilot.jsonl")
     vehicle.log.rows.clear()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import pytest
@@ -96,3 +97,14 @@ def test_read_only_results_become_run_folder_errors(tmp_path):
 
     with pytest.raises(RunFolderError, match="cannot write"):
         write_atomic(Path("/proc/version"), "x")
+
+
+def test_auv_run_refuses_the_same_folders_before_it_connects(tmp_path, capsys):
+    (tmp_path / "notes.txt").write_text("mine")
+    argv = ["run", str(MISSIONS / "field_transit.yaml"), "--vehicle", "mavlink:udpin:127.0.0.1:14998",
+            "--connect-timeout", "30", "--out", str(tmp_path / "notes.txt")]
+    started = time.monotonic()
+    assert main(argv) == 1
+    assert time.monotonic() - started < 10.0  # refused at once, not after waiting for the vehicle
+    assert capsys.readouterr().err.strip().splitlines()[-1] == f"auv: {tmp_path / 'notes.txt'}: exists and is not " \
+                                                                "a folder"
