@@ -1,5 +1,6 @@
 """The `auv` command: a thin shell over the public functions. Known errors become one-line messages and exit
-codes (0 ok, 1 invalid input or failed run, 2 usage); a traceback means a bug in auv-mission.
+codes (0 ok, 1 invalid input or failed run, 2 usage, 130/143 a run stopped by SIGINT/SIGTERM, 141 a closed
+output pipe); a traceback means a bug in auv-mission.
 """
 
 from __future__ import annotations
