@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from mission.agents import REGISTRY
-from mission.errors import AuvError, UnsupportedMissionError
+from mission.errors import AuvError, RunFolderError, UnsupportedMissionError
 from mission.events import EventLog
 from mission.executive import ExecutionReport, Executive
 from mission.interrupt import Interrupted, SignalStop, signal_name, stop_on_signals
@@ -78,6 +78,10 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
         try:
             return _run(mission, seed, vehicle, scene, out_dir, stop, plots, progress, record_stereo,
                         plugin_latency_s)
+        except OSError as exc:  # a file of the run folder could not be written (disk full, removed under us)
+            if out_dir is None or exc.filename is None or out_dir.resolve() not in Path(str(exc.filename)).resolve().parents:
+                raise
+            raise RunFolderError(f"{exc.filename}: cannot write ({exc.strerror or exc})") from exc
         finally:
             if lock is not None:
                 lock.release()
