@@ -79,7 +79,8 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
             return _run(mission, seed, vehicle, scene, out_dir, stop, plots, progress, record_stereo,
                         plugin_latency_s)
         except OSError as exc:  # a file of the run folder could not be written (disk full, removed under us)
-            if out_dir is None or exc.filename is None or out_dir.resolve() not in Path(str(exc.filename)).resolve().parents:
+            where = Path(str(exc.filename)).resolve() if exc.filename is not None else None
+            if out_dir is None or where is None or out_dir.resolve() not in where.parents:
                 raise
             raise RunFolderError(f"{exc.filename}: cannot write ({exc.strerror or exc})") from exc
         finally:
