@@ -119,7 +119,7 @@ def test_the_entry_point_opens_the_adapter_by_uri_scheme(mission: Mission) -> No
 def test_a_heading_speed_depth_command_moves_the_simulated_vehicle_as_the_truth_shows(
         mission: Mission, tmp_path: Path) -> None:
     port = free_udp_port()
-    with ServedVehicle(mission, f"udpout:127.0.0.1:{port}", speedup=25, out=tmp_path):
+    with ServedVehicle(mission, f"udpout:127.0.0.1:{port}", speedup=25, out=tmp_path / "truth"):
         vehicle = open_vehicle(f"udpin:127.0.0.1:{port}", mission, VehicleOptions(connect_timeout=5))
         try:
             start = vehicle.observe().nav
@@ -127,7 +127,7 @@ def test_a_heading_speed_depth_command_moves_the_simulated_vehicle_as_the_truth_
             end = vehicle.observe().nav
         finally:
             vehicle.close()
-    last = truth_rows(tmp_path)[-1]
+    last = truth_rows(tmp_path / "truth")[-1]
     assert abs(float(last["depth"]) - 10.0) < 0.5
     assert abs(((float(last["heading"]) - 90.0 + 180.0) % 360.0) - 180.0) < 3.0
     assert float(last["east"]) > 20.0  # 40 s at up to 1 m/s, after turning from north
@@ -141,7 +141,7 @@ def test_a_heading_speed_depth_command_moves_the_simulated_vehicle_as_the_truth_
 def test_a_station_command_holds_the_point(mission: Mission, tmp_path: Path) -> None:
     port = free_udp_port()
     station = (6.0, -4.0)
-    with ServedVehicle(mission, f"udpout:127.0.0.1:{port}", speedup=25, out=tmp_path):
+    with ServedVehicle(mission, f"udpout:127.0.0.1:{port}", speedup=25, out=tmp_path / "truth"):
         vehicle = open_vehicle(f"udpin:127.0.0.1:{port}", mission, VehicleOptions(connect_timeout=5))
         try:
             drive(vehicle, Command(heading=45.0, speed=0.0, depth=5.0, station=station), 60.0)
@@ -149,7 +149,7 @@ def test_a_station_command_holds_the_point(mission: Mission, tmp_path: Path) -> 
         finally:
             vehicle.close()
     assert math.hypot(nav.north - station[0], nav.east - station[1]) < 0.3
-    last = truth_rows(tmp_path)[-1]
+    last = truth_rows(tmp_path / "truth")[-1]
     assert math.hypot(float(last["north"]) - station[0], float(last["east"]) - station[1]) < 3.0
     assert abs(float(last["depth"]) - 5.0) < 0.3
 
@@ -157,13 +157,13 @@ def test_a_station_command_holds_the_point(mission: Mission, tmp_path: Path) -> 
 def test_an_altitude_command_follows_the_seabed_through_depth_setpoints(write_mission, tmp_path: Path) -> None:
     mission = load_mission(write_mission("low", ALTITUDE_ROUTE, header=HEADER))
     port = free_udp_port()
-    with ServedVehicle(mission, f"udpout:127.0.0.1:{port}", speedup=50, out=tmp_path):
+    with ServedVehicle(mission, f"udpout:127.0.0.1:{port}", speedup=50, out=tmp_path / "truth"):
         vehicle = open_vehicle(f"udpin:127.0.0.1:{port}", mission, VehicleOptions(connect_timeout=5))
         try:
             drive(vehicle, Command(heading=45.0, speed=0.5, altitude=8.0), 160.0)
         finally:
             vehicle.close()
-    last = truth_rows(tmp_path)[-1]
+    last = truth_rows(tmp_path / "truth")[-1]
     assert abs(float(last["altitude"]) - 8.0) < 1.0
 
 
