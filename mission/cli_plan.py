@@ -7,11 +7,13 @@ import argparse
 import json
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mission.errors import MissionError
-from mission.estimate import MissionEstimate, estimate_mission
-from mission.language.models import Mission
+
+if TYPE_CHECKING:
+    from mission.estimate import MissionEstimate
+    from mission.language.models import Mission
 
 
 def print_estimate(estimate: MissionEstimate, as_json: bool, out: Any = None) -> None:
@@ -38,6 +40,8 @@ def _plan(args: argparse.Namespace) -> int:
         raise MissionError([d for d in diags if not d.warning])
     for d in diags:
         print(d, file=sys.stderr)
+    from mission.estimate import estimate_mission
+
     estimate = estimate_mission(mission)
     if not args.json:
         print(f"{mission.name}: estimate before the dive")

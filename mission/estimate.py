@@ -24,7 +24,7 @@ import math
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from mission.language.models import Explore, Inspect, Mission, Reference, RouteElement, Survey, Transit
+from mission.language.models import Explore, Inspect, Mission, Pose, Reference, RouteElement, Survey, Transit
 from mission.vehicle import STATION_KEEPING_SPEED_M_S
 
 DEPTH_GAIN = 0.4  # (m/s) per m: the autopilot's depth loop (`mission.sim.kinematics`)
@@ -137,13 +137,13 @@ def _element(mission: Mission, site: _Site, element: RouteElement, here: _Where)
     if isinstance(p, Explore):
         return _adaptive(mission, element, here, p.budget)
     if isinstance(p, Inspect):
-        targets = mission.object(p.object).targets
-        count = len(targets) if p.targets == "all" else len(p.targets)
-        return _adaptive(mission, element, here, 0.5 * p.search.budget + count * TARGET_WORK_S)
+        obj = mission.object(p.object)
+        count = len(obj.targets) if p.targets == "all" else len(p.targets)
+        return _adaptive(mission, element, here, 0.5 * p.search.budget + count * TARGET_WORK_S, obj.pose)
     assert isinstance(p, Reference)
-    sets = mission.object(p.object).characteristic_points
-    count = len(sets) if p.point_sets == "all" else len(p.point_sets)
-    return _adaptive(mission, element, here, count * 2.0 * len(p.offsets) + REFERENCE_FINE_S)
+    obj = mission.object(p.object)
+    count = len(obj.characteristic_points) if p.point_sets == "all" else len(p.point_sets)
+    return _adaptive(mission, element, here, count * 2.0 * len(p.offsets) + REFERENCE_FINE_S, obj.pose)
 
 
 def _energy(mission: Mission, duration_s: float, moving_s: float, speed: float) -> float:
@@ -239,12 +239,28 @@ def _survey(mission: Mission, site: _Site, ident: str, p: Survey, here: _Where) 
                            round(cover, 2), path)
 
 
-def _adaptive(mission: Mission, element: RouteElement, here: _Where, budget_s: float) -> ElementEstimate:
-    duration = float(budget_s if element.timeout is None else min(budget_s, element.timeout))
-    moving = WORK_FRACTION_MOVING * duration
+def _adaptive(mission: Mission, element: RouteElement, here: _Where, budget_s: float,
+              at: Pose | None = None) -> ElementEstimate:
+    """An adaptive element: its work from its budget, and for a known object the way there first (at the work
+    speed: the agent approaches at it)."""
+    from mission.agents.hover import WORK_SPEED_M_S  # (the agents package is heavy: imported only here)
+
+    work = float(budget_s)
+    approach = 0.0
+    path: tuple[tuple[float, float], ...] = ()
+    if at is not None:
+        approach = math.hypot(at.north - here.north, at.east - here.east)
+        path = ((here.north, here.east), (at.north, at.east))
+        here.north, here.east = at.north, at.east
+    approach_s = approach / WORK_SPEED_M_S
+    duration = approach_s + work
+    if element.timeout is not None:
+        duration = min(duration, element.timeout)
+    moving = WORK_FRACTION_MOVING * work
     speed = STATION_KEEPING_SPEED_M_S
-    return ElementEstimate(element.id, element.kind, moving * speed, duration,
-                           _energy(mission, duration, moving, speed), "budget")
+    energy = _energy(mission, duration, moving, speed) + _energy(mission, 0.0, approach_s, WORK_SPEED_M_S)
+    return ElementEstimate(element.id, element.kind, approach + moving * speed, duration, energy, "budget",
+                           path=path)
 
 
 def coverage_of(estimate: MissionEstimate) -> dict[str, float]:
