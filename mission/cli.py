@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from mission.cli_export import add_export_command
 from mission.cli_onboard import add_onboard_commands
 from mission.errors import AuvError, MissionError
 from mission.extras import has, require
@@ -296,6 +297,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--extend", help="extend this existing model with the run's views instead")
     p.set_defaults(func=_model_build)
     add_onboard_commands(sub)
+    add_export_command(sub)
     return parser
 
 
