@@ -1,0 +1,59 @@
+"""The MCAP log of a run folder reads back with the `mcap` reader: as many odometry messages as trajectory rows,
+poses in ENU, the survey map as a point cloud, events on /rosout and the stereo pairs as images."""
+
+from __future__ import annotations
+
+import csv
+from collections import Counter
+from pathlib import Path
+
+import cv2
+import numpy as np
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
+
+from mission.mcap_log import write_mcap
+
+
+def _messages(path: Path) -> list[tuple[str, object, int]]:
+    with path.open("rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        return [(ch.topic, msg, m.log_time) for _, ch, m, msg in reader.iter_decoded_messages(log_time_order=True)]
+
+
+def _rows(run: Path) -> int:
+    with (run / "trajectory.csv").open(newline="") as f:
+        return sum(1 for _ in csv.reader(f)) - 1
+
+
+def test_the_mcap_log_has_an_odometry_message_per_trajectory_row_in_enu(run_folder: Path) -> None:
+    count = write_mcap(run_folder)
+    messages = _messages(run_folder / "run.mcap")
+    assert count == len(messages)
+    topics = Counter(topic for topic, _, _ in messages)
+    assert topics["/odometry/estimated"] == topics["/odometry/true"] == _rows(run_folder) == 120
+    assert topics["/fix/estimated"] == 120 and topics["/planned_path"] == 1
+    assert topics["/map/far-field/seabed"] == 1 and topics["/rosout"] == 4
+    first_true = next(msg for topic, msg, _ in messages if topic == "/odometry/true")
+    p, q = first_true.pose.pose.position, first_true.pose.pose.orientation  # type: ignore[attr-defined]
+    assert (p.x, p.y, p.z) == (9000.0, 9000.0, -40.0)  # x east, y north, z up
+    assert np.isclose(2 * np.arctan2(q.z, q.w), np.radians(90.0 - 63.4))  # yaw from east, counter-clockwise
+    cloud = next(msg for topic, msg, _ in messages if topic == "/map/far-field/seabed")
+    assert cloud.width == 19 and cloud.point_step == 16  # type: ignore[attr-defined]  # 20 cells, one unknown
+    levels = [msg.level for topic, msg, _ in messages if topic == "/rosout"]  # type: ignore[attr-defined]
+    assert levels == [20, 20, 40, 30]
+
+
+def test_a_recorded_stereo_stream_goes_in_as_mono8_images(run_folder: Path) -> None:
+    stereo = run_folder / "stereo"
+    for side in ("image_0", "image_1"):
+        (stereo / side).mkdir(parents=True)
+        for k in range(3):
+            cv2.imwrite(str(stereo / side / f"{k:06d}.png"), np.full((8, 12), 40 * k + (side == "image_1"), np.uint8))
+    (stereo / "times.txt").write_text("1.0\n1.5\n2.0\n")
+    write_mcap(run_folder, run_folder / "with_stereo.mcap")
+    images = [(t, msg) for topic, msg, t in _messages(run_folder / "with_stereo.mcap") if topic == "/stereo/right"]
+    assert [t for t, _ in images] == [1_000_000_000, 1_500_000_000, 2_000_000_000]
+    last = images[-1][1]
+    assert (last.width, last.height, last.encoding) == (12, 8, "mono8")  # type: ignore[attr-defined]
+    assert set(last.data) == {81}  # type: ignore[attr-defined]
