@@ -87,7 +87,9 @@ def valid_geodetic(value: Any) -> bool:
 
 def _usable_origin(data: dict[str, Any]) -> tuple[float, float] | None:
     origin = data.get("origin")
-    return (float(origin["lat"]), float(origin["lon"])) if valid_geodetic(origin) else None
+    if not isinstance(origin, dict) or not valid_geodetic(origin):
+        return None
+    return float(origin["lat"]), float(origin["lon"])
 
 
 def _point(value: Any, origin: tuple[float, float]) -> Any:

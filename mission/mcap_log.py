@@ -107,7 +107,7 @@ class _Log:
         self.count += 1
 
     def close(self) -> None:
-        self.writer.finish()
+        self.writer.finish()  # type: ignore[no-untyped-call]
         self._file.close()
 
 

@@ -71,7 +71,8 @@ def _track(layer: str, name: str, north: np.ndarray, east: np.ndarray) -> list[F
     keep = np.isfinite(north) & np.isfinite(east)
     if keep.sum() < 2:  # `auv run` folders have no truth until `auv score` fills it
         return []
-    return [Feature(layer, name, "LineString", (np.column_stack([north[keep], east[keep]]),), {"points": int(keep.sum())})]
+    line = np.column_stack([north[keep], east[keep]])
+    return [Feature(layer, name, "LineString", (line,), {"points": int(keep.sum())})]
 
 
 def _at(time: np.ndarray, north: np.ndarray, east: np.ndarray, t: float) -> tuple[float, float]:

@@ -15,6 +15,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from mission.errors import AuvError
 from mission.export.plan import Leg
 from mission.geodesy import geodetic_to_ned, ned_to_geodetic
@@ -110,7 +112,7 @@ def read_imc_plan(data: bytes, lat0: float, lon0: float) -> tuple[str, list[ImcM
             offsets = [(p.x, p.y) for p in m.points]
             lats, lons = ned_to_geodetic([o[0] for o in offsets], [o[1] for o in offsets], lat, lon)
         else:
-            lats, lons = [lat], [lon]
+            lats, lons = np.array([lat]), np.array([lon])
         north, east = geodetic_to_ned(lats, lons, lat0, lon0)
         points = tuple((float(n), float(e)) for n, e in zip(north.reshape(-1), east.reshape(-1), strict=True))
         found.append(ImcManeuver(pm.maneuver_id, type(m).__name__, points, float(m.z),

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import (BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, ValidationInfo, WithJsonSchema,
-                      field_validator, model_validator)
+import pydantic
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
 from mission import geodesy
 from mission.language.units import Duration, Percent
@@ -39,7 +39,7 @@ def _or_geodetic(schema: dict[str, Any]) -> None:
 
 
 # A point of a polygon: [north, east] metres, or {lat, lon} degrees that `Mission` converts with its `origin`.
-PlanePoint = Annotated[Vec2, BeforeValidator(_unplaced_geodetic), WithJsonSchema({"anyOf": [
+PlanePoint = Annotated[Vec2, pydantic.BeforeValidator(_unplaced_geodetic), pydantic.WithJsonSchema({"anyOf": [
     {"type": "array", "prefixItems": [{"type": "number"}, {"type": "number"}], "minItems": 2, "maxItems": 2},
     _GEODETIC_SCHEMA]})]
 Polygon = Annotated[list[PlanePoint], Field(min_length=3, description="[[north, east], ...] in metres, or "

@@ -66,7 +66,7 @@ def test_kml_placemarks_read_back_to_the_ned_polygons_within_1_cm(mission_file: 
     export(mission_file, "kml", out)
     ns = {"k": "http://www.opengis.net/kml/2.2"}
     root = ET.parse(out).getroot()
-    folders = {f.findtext("k:name", namespaces=ns): f for f in root.iter("{%s}Folder" % ns["k"])}
+    folders = {f.findtext("k:name", namespaces=ns): f for f in root.iter(f"{{{ns['k']}}}Folder")}
     assert {"geofence", "survey_areas", "no_go_zones", "planned_paths", "objects", "home"} <= set(folders)
     text = folders["survey_areas"].find(".//k:outerBoundaryIs/k:LinearRing/k:coordinates", ns)
     assert text is not None and text.text is not None

@@ -16,8 +16,13 @@ from pymavlink import mavutil, mavwp
 from mission.errors import MissionError
 from mission.export import export, plan_legs
 from mission.export.imc_plan import read_imc_plan
-from mission.export.mavlink_plan import (MAV_CMD_NAV_WAYPOINT, MAV_FRAME_GLOBAL_RELATIVE_ALT,
-                                         MAV_FRAME_GLOBAL_TERRAIN_ALT, read_wpl, upload_mission)
+from mission.export.mavlink_plan import (
+    MAV_CMD_NAV_WAYPOINT,
+    MAV_FRAME_GLOBAL_RELATIVE_ALT,
+    MAV_FRAME_GLOBAL_TERRAIN_ALT,
+    read_wpl,
+    upload_mission,
+)
 from mission.geodesy import geodetic_to_ned
 from mission.language import load_mission
 
