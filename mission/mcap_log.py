@@ -10,9 +10,9 @@ Topics:
   where the row has the truth); the estimate carries the navigation's position sigma in its covariance;
 - `/fix/estimated` (sensor_msgs/NavSatFix): the estimated track on the globe, when the mission has an `origin`;
 - `/planned_path` (nav_msgs/Path): the plannable elements' paths (`mission.export.plan`) at the run's start;
-- `/map/ELEMENT/seabed` (sensor_msgs/PointCloud2): a survey's bathymetric grid from its multibeam soundings
-  (x, y, z and the information map as `intensity`); `/map/ELEMENT/occupied`: the occupied voxels an explore
-  element mapped; each at the time its element ended;
+- `/map/seabed` (sensor_msgs/PointCloud2): each survey's bathymetric grid from its multibeam soundings (x, y, z
+  and the information map as `intensity`), and `/map/occupied`: the occupied voxels each explore element mapped;
+  a message per element, at the time it ended (the run folder keeps these grids, not the raw pings);
 - `/stereo/left`, `/stereo/right` (sensor_msgs/Image, mono8): the stereo pairs of `stereo/`, when recorded;
 - `/rosout` (rcl_interfaces/Log): every event of `events.jsonl`, safety events at ERROR and failures at WARN.
 """
@@ -162,11 +162,11 @@ def _maps(log: _Log, run: RunData) -> None:
             east = float(m["east0"]) + cols * cell
             info = np.asarray(m["info"], float)[rows, cols] if "info" in m else None
             xyz = np.column_stack([east, north, -depth[rows, cols]])
-            log.write(f"/map/{element}/seabed", "sensor_msgs/PointCloud2", point_cloud(t, xyz, info), t)
+            log.write("/map/seabed", "sensor_msgs/PointCloud2", point_cloud(t, xyz, info), t)
         if "explore_occupied" in m:
             occ = np.asarray(m["explore_occupied"], float).reshape(-1, 4)
             xyz = np.column_stack([occ[:, 1], occ[:, 0], -occ[:, 2]])
-            log.write(f"/map/{element}/occupied", "sensor_msgs/PointCloud2", point_cloud(t, xyz), t)
+            log.write("/map/occupied", "sensor_msgs/PointCloud2", point_cloud(t, xyz), t)
 
 
 def _events(log: _Log, run: RunData) -> None:

@@ -69,6 +69,8 @@ def run_folder(tmp_path: Path) -> Path:
     depth[0, 0] = np.nan
     np.savez_compressed(run / "maps" / "far-field.npz", depth=depth, info=np.ones((4, 5)), north0=np.array(9000.0),
                         east0=np.array(9000.0), cell=np.array(0.5), lines=np.zeros((0, 2, 2)))
+    occupied = np.array([[9150.0, 9200.0, 57.0, 0.0], [9150.1, 9200.0, 57.0, 0.0], [9150.2, 9200.1, 56.9, 0.0]])
+    np.savez_compressed(run / "maps" / "look-closer.npz", explore_occupied=occupied, lines=np.zeros((0, 2, 2)))
     return run
 
 

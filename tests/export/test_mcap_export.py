@@ -4,8 +4,10 @@ poses in ENU, the survey map as a point cloud, events on /rosout and the stereo 
 from __future__ import annotations
 
 import csv
+import json
 from collections import Counter
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -13,6 +15,8 @@ from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
 from mission.mcap_log import write_mcap
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _messages(path: Path) -> list[tuple[str, object, int]]:
@@ -33,12 +37,12 @@ def test_the_mcap_log_has_an_odometry_message_per_trajectory_row_in_enu(run_fold
     topics = Counter(topic for topic, _, _ in messages)
     assert topics["/odometry/estimated"] == topics["/odometry/true"] == _rows(run_folder) == 120
     assert topics["/fix/estimated"] == 120 and topics["/planned_path"] == 1
-    assert topics["/map/far-field/seabed"] == 1 and topics["/rosout"] == 4
+    assert topics["/map/seabed"] == topics["/map/occupied"] == 1 and topics["/rosout"] == 4
     first_true = next(msg for topic, msg, _ in messages if topic == "/odometry/true")
     p, q = first_true.pose.pose.position, first_true.pose.pose.orientation  # type: ignore[attr-defined]
     assert (p.x, p.y, p.z) == (9000.0, 9000.0, -40.0)  # x east, y north, z up
     assert np.isclose(2 * np.arctan2(q.z, q.w), np.radians(90.0 - 63.4))  # yaw from east, counter-clockwise
-    cloud = next(msg for topic, msg, _ in messages if topic == "/map/far-field/seabed")
+    cloud = next(msg for topic, msg, _ in messages if topic == "/map/seabed")
     assert cloud.width == 19 and cloud.point_step == 16  # type: ignore[attr-defined]  # 20 cells, one unknown
     levels = [msg.level for topic, msg, _ in messages if topic == "/rosout"]  # type: ignore[attr-defined]
     assert levels == [20, 20, 40, 30]
@@ -57,3 +61,32 @@ def test_a_recorded_stereo_stream_goes_in_as_mono8_images(run_folder: Path) -> N
     last = images[-1][1]
     assert (last.width, last.height, last.encoding) == (12, 8, "mono8")  # type: ignore[attr-defined]
     assert set(last.data) == {81}  # type: ignore[attr-defined]
+
+
+def _layout_topics(layout: dict[str, Any]) -> set[str]:
+    found: set[str] = set()
+    for panel_id, config in layout["configById"].items():
+        kind = panel_id.split("!")[0]
+        if kind == "3D":
+            found |= set(config["topics"])
+        elif kind == "Image":
+            found.add(config["imageMode"]["imageTopic"])
+        elif kind == "map":
+            found |= set(config["topicColors"])
+        elif kind == "Plot":
+            found |= {p["value"].split(".")[0] for p in config["paths"]}
+        elif kind == "RosOut":
+            found.add(config["topicToRender"])
+    return found
+
+
+def test_every_topic_the_foxglove_layout_shows_is_in_the_log(run_folder: Path, tmp_path: Path) -> None:
+    layout = json.loads((ROOT / "docs" / "foxglove_layout.json").read_text())
+    for side in ("image_0", "image_1"):
+        (run_folder / "stereo" / side).mkdir(parents=True)
+        cv2.imwrite(str(run_folder / "stereo" / side / "000000.png"), np.zeros((4, 4), np.uint8))
+    (run_folder / "stereo" / "times.txt").write_text("1.0\n")
+    write_mcap(run_folder, tmp_path / "all.mcap")
+    written = {topic for topic, _, _ in _messages(tmp_path / "all.mcap")}
+    shown = _layout_topics(layout)
+    assert len(shown) >= 8 and shown <= written
