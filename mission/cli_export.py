@@ -1,9 +1,10 @@
 """`auv export`: a thin shell over `mission.export.export` (and `mission.export.mavlink_plan.upload_mission` for
-`--upload`); `mission.cli` adds it."""
+`--upload`), and the `--mcap` option of the commands that write run folders; `mission.cli` adds them."""
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 from typing import Any
 
 
@@ -23,6 +24,20 @@ def _export(args: argparse.Namespace) -> int:
         upload_mission(items, args.upload, timeout=args.timeout)
         print(f"{len(items)} mission items uploaded to {args.upload}")
     return 0
+
+
+def add_mcap_option(parser: argparse.ArgumentParser) -> None:
+    """`--mcap` for the commands that write a run folder (`auv simulate`, `auv run`)."""
+    parser.add_argument("--mcap", action="store_true", help="also write the run folder as DIR/run.mcap (ROS 2 "
+                        "messages for Foxglove; needs the [interop] extra)")
+
+
+def write_mcap_if_asked(args: argparse.Namespace, run_dir: Path) -> None:
+    """After a run: write `run_dir/run.mcap` when `--mcap` was given."""
+    if getattr(args, "mcap", False):
+        from mission.mcap_log import write_mcap
+
+        print(f"MCAP log: {write_mcap(run_dir)} messages in {run_dir / 'run.mcap'}")
 
 
 def add_export_command(sub: Any) -> None:

@@ -17,11 +17,13 @@ def _auv(*args: str | Path) -> subprocess.CompletedProcess[str]:
 
 
 @pytest.mark.parametrize("fmt", ["geojson", "kml", "mavlink", "imc"])
-def test_export_writes_the_file_and_says_what_it_holds(mission_file: Path, tmp_path: Path, fmt: str) -> None:
+def test_export_writes_the_file_and_says_what_it_holds(mission_file: Path, tmp_path: Path, fmt: str,
+                                                       capsys: pytest.CaptureFixture[str]) -> None:
+    from mission.cli import main
+
     out = tmp_path / f"plan.{fmt}"
-    done = _auv(mission_file, "--format", fmt, "--out", out)
-    assert done.returncode == 0, done.stderr
-    assert out.stat().st_size > 0 and str(out) in done.stdout
+    assert main(["export", str(mission_file), "--format", fmt, "--out", str(out)]) == 0
+    assert out.stat().st_size > 0 and str(out) in capsys.readouterr().out
 
 
 def test_an_export_without_an_origin_is_one_located_line(no_origin_mission_file: Path, tmp_path: Path) -> None:
@@ -47,3 +49,21 @@ def test_a_run_folder_exports_to_mcap_inside_it(run_folder: Path) -> None:
     done = _auv(run_folder, "--format", "mcap")
     assert done.returncode == 0, done.stderr
     assert (run_folder / "run.mcap").is_file() and "messages" in done.stdout
+
+
+def test_simulate_with_mcap_writes_an_odometry_message_per_trajectory_row(tmp_path: Path) -> None:
+    from collections import Counter
+
+    from mcap.reader import make_reader
+
+    root = Path(__file__).resolve().parents[2]
+    cli = "import sys\n" + CLI
+    done = subprocess.run([sys.executable, "-c", cli, "simulate", str(root / "missions" / "field_transit.yaml"),
+                           "--out", str(tmp_path / "run"), "--no-plots", "-q", "--mcap"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    with (tmp_path / "run" / "run.mcap").open("rb") as f:
+        topics = Counter(ch.topic for _, ch, _ in make_reader(f).iter_messages())
+    rows = len((tmp_path / "run" / "trajectory.csv").read_text().splitlines()) - 1
+    assert rows > 1000 and topics["/odometry/estimated"] == topics["/odometry/true"] == rows
+    assert topics["/rosout"] >= 12  # every element started and finished, the mission started and finished
