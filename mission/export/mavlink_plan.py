@@ -1,5 +1,5 @@
 """MAVLink missions of the plannable route (`mission.export.plan`): QGC WPL 110 plain text, as QGroundControl,
-Cockpit, Mission Planner and pymavlink's `mavwp` read it, and an upload over MAVLink's mission protocol
+Mission Planner and pymavlink's `mavwp` read it, and an upload over MAVLink's mission protocol
 (MISSION_COUNT, MISSION_REQUEST_INT, MISSION_ITEM_INT, MISSION_ACK) to any endpoint pymavlink reaches.
 
 Item 0 is home (MAV_FRAME_GLOBAL). Each leg starts with MAV_CMD_DO_CHANGE_SPEED (ground speed, m/s) and goes on
