@@ -112,10 +112,10 @@ def upload_mission(items: Sequence[MissionItem], address: str, *, target_system:
     Raises MissionUploadError when the vehicle does not answer within `timeout` seconds of the last message, or
     acknowledges with anything but MAV_MISSION_ACCEPTED.
     """
-    from pymavlink import mavutil
+    from mission.vehicles.mavlink_link import mavutil  # MAVLink 2, as the adapter speaks it
 
-    link = mavutil.mavlink_connection(address, source_system=255, source_component=190)
-    mav = mavutil.mavlink
+    link = mavutil().mavlink_connection(address, source_system=255, source_component=190)
+    mav = mavutil().mavlink
     try:
         deadline = time.monotonic() + timeout
         last_count: float | None = None

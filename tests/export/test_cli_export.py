@@ -6,9 +6,30 @@ import subprocess
 import sys
 from pathlib import Path
 
+import export_cases
 import pytest
 
 CLI = "from mission.cli import main\nraise SystemExit(main(sys.argv[1:]))"
+
+
+@pytest.fixture
+def mission_file(tmp_path: Path) -> Path:
+    return export_cases.far_mission(tmp_path)
+
+
+@pytest.fixture
+def run_folder(tmp_path: Path) -> Path:
+    return export_cases.synthetic_run(tmp_path)
+
+
+@pytest.fixture
+def adaptive_mission_file(tmp_path: Path) -> Path:
+    return export_cases.adaptive_mission(tmp_path)
+
+
+@pytest.fixture
+def no_origin_mission_file(tmp_path: Path) -> Path:
+    return export_cases.no_origin_mission(tmp_path)
 
 
 def _auv(*args: str | Path) -> subprocess.CompletedProcess[str]:

@@ -6,7 +6,9 @@ import json
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import export_cases
 import numpy as np
+import pytest
 import shapely
 from shapely.geometry import Polygon, shape
 
@@ -15,6 +17,16 @@ from mission.geodesy import geodetic_to_ned
 from mission.language import load_mission
 
 ORIGIN = (42.95, 131.85)
+
+
+@pytest.fixture
+def mission_file(tmp_path: Path) -> Path:
+    return export_cases.far_mission(tmp_path)
+
+
+@pytest.fixture
+def run_folder(tmp_path: Path) -> Path:
+    return export_cases.synthetic_run(tmp_path)
 
 
 def _to_ned(coords: np.ndarray) -> np.ndarray:

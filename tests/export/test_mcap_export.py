@@ -10,13 +10,20 @@ from pathlib import Path
 from typing import Any
 
 import cv2
+import export_cases
 import numpy as np
+import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
 from mission.mcap_log import write_mcap
 
 ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture
+def run_folder(tmp_path: Path) -> Path:
+    return export_cases.synthetic_run(tmp_path)
 
 
 def _messages(path: Path) -> list[tuple[str, object, int]]:

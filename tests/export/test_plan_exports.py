@@ -9,9 +9,9 @@ import threading
 from pathlib import Path
 from typing import Any
 
+import export_cases
 import numpy as np
 import pytest
-from pymavlink import mavutil, mavwp
 
 from mission.errors import MissionError
 from mission.export import export, plan_legs
@@ -25,8 +25,19 @@ from mission.export.mavlink_plan import (
 )
 from mission.geodesy import geodetic_to_ned
 from mission.language import load_mission
+from mission.vehicles.mavlink_link import mavutil as mavlink2
 
 ORIGIN = (42.95, 131.85)
+
+
+@pytest.fixture
+def mission_file(tmp_path: Path) -> Path:
+    return export_cases.far_mission(tmp_path)
+
+
+@pytest.fixture
+def adaptive_mission_file(tmp_path: Path) -> Path:
+    return export_cases.adaptive_mission(tmp_path)
 
 
 def _planned(mission_file: Path) -> tuple[np.ndarray, list[Any]]:
@@ -37,6 +48,9 @@ def _planned(mission_file: Path) -> tuple[np.ndarray, list[Any]]:
 def test_the_mavlink_mission_reloads_through_mavwp_within_15_cm(mission_file: Path, tmp_path: Path) -> None:
     out = tmp_path / "far.waypoints"
     export(mission_file, "mavlink", out)
+    mavutil = mavlink2()  # pymavlink speaking MAVLink 2 (the dialect is chosen once per process)
+    from pymavlink import mavwp
+
     loader = mavwp.MAVWPLoader()
     n = loader.load(str(out))
     items = [loader.wp(i) for i in range(n)]
@@ -63,6 +77,7 @@ def _free_udp_port() -> int:
 
 def _vehicle(port: int, received: list[Any], done: threading.Event) -> None:
     """A vehicle's side of the mission protocol, on a real pymavlink endpoint: ask for every item, then ACK."""
+    mavutil = mavlink2()
     link = mavutil.mavlink_connection(f"udpin:127.0.0.1:{port}", source_system=1, source_component=1)
     try:
         count = link.recv_match(type="MISSION_COUNT", blocking=True, timeout=5)

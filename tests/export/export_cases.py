@@ -1,4 +1,5 @@
-"""A small mission placed on the globe and a synthetic run folder of it, for the export tests."""
+"""A small mission placed on the globe and a synthetic run folder of it, for the export tests (plain functions:
+a `conftest.py` here would shadow `tests/conftest.py`, which other tests import as `conftest`)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,6 @@ import json
 from pathlib import Path
 
 import numpy as np
-import pytest
 import yaml
 
 from mission.runfolder import TRAJECTORY_COLUMNS
@@ -39,13 +39,11 @@ def write_mission(path: Path, mission: dict[str, object]) -> Path:
     return path
 
 
-@pytest.fixture
-def mission_file(tmp_path: Path) -> Path:
+def far_mission(tmp_path: Path) -> Path:
     return write_mission(tmp_path / "far.yaml", MISSION)
 
 
-@pytest.fixture
-def run_folder(tmp_path: Path) -> Path:
+def synthetic_run(tmp_path: Path) -> Path:
     """A run folder as `auv simulate` leaves it: 120 trajectory rows, a photo, a safety event, a survey map."""
     run = tmp_path / "run"
     run.mkdir()
@@ -74,11 +72,9 @@ def run_folder(tmp_path: Path) -> Path:
     return run
 
 
-@pytest.fixture
-def adaptive_mission_file(tmp_path: Path) -> Path:
+def adaptive_mission(tmp_path: Path) -> Path:
     return write_mission(tmp_path / "adaptive.yaml", ADAPTIVE)
 
 
-@pytest.fixture
-def no_origin_mission_file(tmp_path: Path) -> Path:
+def no_origin_mission(tmp_path: Path) -> Path:
     return write_mission(tmp_path / "no_origin.yaml", {k: v for k, v in MISSION.items() if k != "origin"})
