@@ -97,3 +97,17 @@ def test_every_topic_the_foxglove_layout_shows_is_in_the_log(run_folder: Path, t
     written = {topic for topic, _, _ in _messages(tmp_path / "all.mcap")}
     shown = _layout_topics(layout)
     assert len(shown) >= 8 and shown <= written
+
+
+def test_a_run_without_the_truth_logs_only_the_estimate(run_folder: Path) -> None:
+    """`auv run` folders leave the true columns empty until `auv score` fills them."""
+    path = run_folder / "trajectory.csv"
+    with path.open(newline="") as f:
+        rows = list(csv.reader(f))
+    for row in rows[1:]:
+        row[1:6] = [""] * 5
+    with path.open("w", newline="") as f:
+        csv.writer(f).writerows(rows)
+    write_mcap(run_folder)
+    topics = Counter(topic for topic, _, _ in _messages(run_folder / "run.mcap"))
+    assert topics["/odometry/estimated"] == 120 and "/odometry/true" not in topics
