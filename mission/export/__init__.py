@@ -8,17 +8,19 @@
 
 Every format but `mcap` places the local frame with the mission's `origin`; without one, the export is a located
 error. MAVLink and IMC carry only transit and survey elements and refuse adaptive ones by name.
+Importing this package is light (the `auv` parser reads `FORMATS`); each export imports what it needs.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from mission.errors import AuvError
-from mission.export.plan import Leg, plan_legs
-from mission.geodesy import require_origin
-from mission.language.models import Mission
+
+if TYPE_CHECKING:
+    from mission.language.models import Mission
 
 FORMATS = ("geojson", "kml", "mavlink", "imc", "mcap")
 SUFFIX = {"geojson": ".geojson", "kml": ".kml", "mavlink": ".waypoints", "imc": ".imc", "mcap": ".mcap"}
@@ -45,6 +47,9 @@ def default_out(source: Path, fmt: str) -> Path:
 
 def export(source: str | Path, fmt: str, out: str | Path | None = None) -> ExportResult:
     """Export a mission file or a run folder (a directory) as `fmt` to `out` (default: `default_out`)."""
+    from mission.export.plan import plan_legs
+    from mission.geodesy import require_origin
+
     source = Path(source)
     if fmt not in FORMATS:
         raise AuvError(f"unknown export format '{fmt}' (known: {', '.join(FORMATS)})")
@@ -96,4 +101,4 @@ def _capture_radii(mission: Mission) -> dict[str, float]:
     return {el.id: el.transit.capture_radius for el in mission.route if el.transit is not None}
 
 
-__all__ = ["FORMATS", "ExportResult", "Leg", "default_out", "export", "plan_legs"]
+__all__ = ["FORMATS", "ExportResult", "default_out", "export"]

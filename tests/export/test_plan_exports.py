@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from mission.errors import MissionError
-from mission.export import export, plan_legs
+from mission.export import export
 from mission.export.imc_plan import read_imc_plan
 from mission.export.mavlink_plan import (
     MAV_CMD_NAV_WAYPOINT,
@@ -23,6 +23,7 @@ from mission.export.mavlink_plan import (
     read_wpl,
     upload_mission,
 )
+from mission.export.plan import plan_legs
 from mission.geodesy import geodetic_to_ned
 from mission.language import load_mission
 from mission.vehicles.mavlink_link import mavutil as mavlink2
