@@ -9,6 +9,7 @@ each event placed on the estimated track at its time.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -81,6 +82,8 @@ def _at(time: np.ndarray, north: np.ndarray, east: np.ndarray, t: float) -> tupl
 
 
 def _plain(value: Any) -> Property:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None  # GeoJSON is JSON: no NaN
     if isinstance(value, (str, int, float, bool)) or value is None:
         return value
     return str(value)

@@ -43,4 +43,4 @@ def to_geojson(features: Sequence[Feature], lat0: float, lon0: float, name: str)
 
 
 def write_geojson(features: Sequence[Feature], lat0: float, lon0: float, name: str, out: Path) -> None:
-    out.write_text(json.dumps(to_geojson(features, lat0, lon0, name), indent=1) + "\n", encoding="utf-8")
+    out.write_text(json.dumps(to_geojson(features, lat0, lon0, name), indent=1, allow_nan=False) + "\n", encoding="utf-8")

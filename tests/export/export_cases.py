@@ -61,7 +61,9 @@ def synthetic_run(tmp_path: Path) -> Path:
               {"time": 40.0, "event": "safety_violation", "monitor": "geofence", "element": "far-field"},
               {"time": 59.5, "event": "element_failed", "element": "far-field", "kind": "survey", "reason": "x"}]
     (run / "events.jsonl").write_text("".join(json.dumps(e) + "\n" for e in events), encoding="utf-8")
-    (run / "metrics.json").write_text(json.dumps({"completed": False}), encoding="utf-8")
+    detections = [{"id": "manifold-1", "north": 9152.0, "east": 9201.0, "height": float("nan")}]
+    metrics = {"completed": False, "elements": [{"id": "far-field", "detections": detections}]}
+    (run / "metrics.json").write_text(json.dumps(metrics), encoding="utf-8")  # NaN, as json writes it
     (run / "maps").mkdir()
     depth = np.full((4, 5), 60.0)
     depth[0, 0] = np.nan

@@ -101,5 +101,8 @@ def test_a_run_exports_its_tracks_photos_and_safety_events_as_geojson(run_folder
     assert photo["properties"]["file"] == "photos/t1_0.png"
     # the photo at t = 20 s sits on the estimated track at that time
     assert np.allclose(_to_ned(np.asarray([photo["geometry"]["coordinates"]])), [[9040.3, 9019.8]], atol=0.01)
+    detection = layers["detections"]
+    assert np.allclose(_to_ned(np.asarray([detection["geometry"]["coordinates"]])), [[9152.0, 9201.0]], atol=0.01)
+    assert detection["properties"]["height"] is None  # GeoJSON is strict JSON: no NaN
     safety = [f["properties"]["event"] for f in features if f["properties"]["layer"] == "safety_events"]
     assert safety == ["safety_violation", "element_failed"]
