@@ -43,4 +43,5 @@ def to_geojson(features: Sequence[Feature], lat0: float, lon0: float, name: str)
 
 
 def write_geojson(features: Sequence[Feature], lat0: float, lon0: float, name: str, out: Path) -> None:
-    out.write_text(json.dumps(to_geojson(features, lat0, lon0, name), indent=1, allow_nan=False) + "\n", encoding="utf-8")
+    text = json.dumps(to_geojson(features, lat0, lon0, name), indent=1, allow_nan=False)
+    out.write_text(text + "\n", encoding="utf-8")
