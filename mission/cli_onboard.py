@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from mission.cli_export import add_mcap_option, write_mcap_if_asked
 from mission.errors import MissionError
 from mission.interrupt import exit_code
 
@@ -41,6 +42,7 @@ def _run(args: argparse.Namespace) -> int:
         extra = f" ({e['reason']})" if e.get("reason") else ""
         print(f"  {e['id']:<24} {e['kind']:<9} {e['status']:<10} {e['duration_s']:8.1f} s{extra}")
     print(f"run folder: {out}")
+    write_mcap_if_asked(args, out)
     if m.get("interrupted"):
         return exit_code(getattr(signal.Signals, m["signal"]))
     return 0 if m["completed"] else 1
@@ -128,6 +130,7 @@ def add_onboard_commands(sub: Any) -> None:
     p.add_argument("--force", action="store_true", help="replace an earlier run's folder whole")
     p.add_argument("--connect-timeout", type=float, default=10.0, metavar="S",
                    help="seconds to wait for the vehicle (default 10)")
+    add_mcap_option(p)
     p.set_defaults(func=_run)
 
     p = sub.add_parser("vehicles", help="list installed vehicle adapters (entry-point group auv.vehicles)")
