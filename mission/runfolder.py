@@ -221,7 +221,7 @@ def check_complete(folder: Path) -> None:
         if (folder / "events.jsonl").is_file() or (folder / "trajectory.csv").is_file():
             raise RunFolderError(f"{folder}: incomplete run folder (no metrics.json: the run was killed, or is still "
                                  "running)")
-        raise RunFolderError(f"{folder}: not a run folder (no metrics.json)")
+        raise RunFolderError(f"{folder}: not a complete run folder (missing metrics.json)")
 
 
 def read_run_folder(folder: str | Path) -> RunData:

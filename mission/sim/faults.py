@@ -17,7 +17,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import Any, TypeVar
 
-from mission.language.models import BatteryStep, Fault, SensorFault, ThrusterDegraded, VehicleSettings
+from mission.language.fault_models import BatteryStep, Fault, SensorFault, ThrusterDegraded
+from mission.language.models import VehicleSettings
 
 SENSOR_KEYS = {"multibeam": "mbes", "scanner": "scanner", "stereo": "stereo"}  # fault name → payload name
 DVL_LOST_DRIFT_M_S = 0.1  # growth of the position sigma while the DVL is lost: unknown current and speed error
