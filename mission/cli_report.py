@@ -1,4 +1,4 @@
-"""`auv report CAMPAIGN_DIR [--against OTHER_DIR] [--out FILE]`: a campaign's HTML report (`mission.campaign_report`)."""
+"""`auv report CAMPAIGN_DIR [--against OTHER_DIR] [--out FILE]`: a campaign's HTML page (`mission.campaign_report`)."""
 
 from __future__ import annotations
 
