@@ -30,8 +30,10 @@ from mission.language.models import (
     Sensors,
     Survey,
     Transit,
+    VehicleSettings,
 )
 from mission.language.source import Located, PathKey
+from mission.language.timing import check_timing
 
 
 @dataclass
@@ -45,6 +47,7 @@ class Parts:
     objects: list[tuple[int, KnownObject]] = field(default_factory=list)
     route: list[tuple[int, RouteElement]] = field(default_factory=list)
     raw_object_ids: set[str] = field(default_factory=set)  # ids of objects, even those that did not validate
+    vehicle: VehicleSettings | None = None
 
 
 def _hint(name: str, known: Iterable[str]) -> str:
@@ -234,4 +237,5 @@ def _legs_outside(doc: Located, parts: Parts, fence: ShapelyPolygon) -> list[Dia
 
 def cross_check(doc: Located, parts: Parts) -> list[Diagnostic]:
     """Every cross-section problem of a mission whose sections validated (fully or partly)."""
-    return _check_objects(doc, parts) + _check_route(doc, parts) + _check_envelope(doc, parts)
+    return _check_objects(doc, parts) + _check_route(doc, parts) + _check_envelope(doc, parts) + check_timing(
+        doc, parts)

@@ -13,7 +13,7 @@ whose syntax error messages the diagnostics are written for.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
 from yaml.composer import Composer
@@ -37,6 +37,11 @@ class LimitExceeded(yaml.MarkedYAMLError):
 class BoundedComposer(Composer):
     """Composer with limits; mix it in before a parser (see `FastLoader` and `ExactLoader`)."""
 
+    if TYPE_CHECKING:  # provided by the parser it is mixed with
+        def check_event(self, *choices: Any) -> bool: ...
+
+        def peek_event(self) -> Any: ...
+
     def init_bounds(self) -> None:
         self._depth = 0
         self._aliases = 0
@@ -51,7 +56,7 @@ class BoundedComposer(Composer):
         if self._nodes > MAX_NODES:
             self._refuse(f"the document holds more than {MAX_NODES:,} values (aliases expanded)", mark)
 
-    def compose_node(self, parent: Node | None, index: Any) -> Node:
+    def compose_node(self, parent: Node | None, index: Any) -> Node | None:
         if self.check_event(AliasEvent):
             event = self.peek_event()
             self._aliases += 1
@@ -106,13 +111,13 @@ class ExactLoader(BoundedComposer, Reader, Scanner, Parser, Resolver):
         self.init_bounds()
 
 
-def _fast_loader() -> type[BoundedComposer] | None:
+def _fast_loader() -> Any:
     try:
         from yaml._yaml import CParser
     except ImportError:  # PyYAML built without libyaml
         return None
 
-    class FastLoader(BoundedComposer, CParser, Resolver):  # type: ignore[misc, valid-type]
+    class FastLoader(BoundedComposer, CParser, Resolver):
         """libyaml's event parser under the limits."""
 
         def __init__(self, stream: str):

@@ -159,7 +159,9 @@ class Safety(Strict):
     max_duration: Annotated[Time, Field(ge=1.0)] = 6 * 3600.0  # a hard stop: abort legs end by it too
     energy_reserve: Percent = 20.0
     on_violation: OnViolation = OnViolation()
-    link_timeout: Annotated[Duration, Field(ge=0.1, le=L.MAX_LINK_TIMEOUT_S)] = 3.0  # onboard: no heartbeat from the vehicle for this long is a lost link
+    # onboard: no heartbeat from the vehicle for this long is a lost link
+    # onboard: no heartbeat from the vehicle for this long is a lost link
+    link_timeout: Annotated[Duration, Field(ge=0.1, le=L.MAX_LINK_TIMEOUT_S)] = 3.0
 
 
 class Pose(Strict):
@@ -266,8 +268,9 @@ class Reference(Strict):
     point_sets: Literal["all"] | list[Identifier] = "all"
     altitude: Annotated[float, Field(gt=0.5, le=20)] = 3.6  # of the final, precise referencing
     search_altitude: Annotated[float, Field(gt=0.5, le=30)] = 6.0  # while searching: a wider view
-    offsets: Annotated[list[Vec2], Field(max_length=L.MAX_OFFSETS)] = [(0.0, 0.0), (1.5, 0.0), (-1.5, 0.0), (0.0, 1.5), (0.0, -1.5),
-                           (1.5, 1.5), (1.5, -1.5), (-1.5, 1.5), (-1.5, -1.5)]  # north, east (m) around each set
+    offsets: Annotated[list[Vec2], Field(max_length=L.MAX_OFFSETS)] = [  # north, east (m) around each set
+        (0.0, 0.0), (1.5, 0.0), (-1.5, 0.0), (0.0, 1.5), (0.0, -1.5),
+        (1.5, 1.5), (1.5, -1.5), (-1.5, 1.5), (-1.5, -1.5)]
     tolerance: Annotated[float, Field(gt=0, le=1)] = 0.05
     settle: Time = 3.0
 
