@@ -135,11 +135,13 @@ class Executive:
             self.emit("safety_violation", nav.time, **{k: val for k, val in record.items() if k != "time"})
         return found
 
-    def _run(self, element_id: str, kind: str, agent: Agent, element: RouteElement, aborting: bool
-             ) -> ElementReport:
+    def _run(self, element_id: str, kind: str, agent: Agent, element: RouteElement, aborting: bool,
+             deadline: float | None = None) -> ElementReport:
         nav = self.vehicle.observe().nav
         rep = ElementReport(element_id, kind, ElementStatus.RUNNING, start_time=nav.time)
         timeout = default_timeout(element, nav, self.mission)
+        if deadline is not None:  # a hard end of the run (abort legs): the element has what time is left
+            timeout = min(timeout, max(deadline - nav.time, 0.0))
         try:
             agent.start(AgentContext(self.mission, element, nav, self.emit, self.report.knowledge, self.plugins,
                                      self.artifacts))
@@ -242,13 +244,17 @@ class Executive:
                 self.on_tick(nav)
 
     def _abort(self, reason: str) -> None:
-        """Go to the abort point at a safe depth, then surface there (per `safety.on_violation`)."""
+        """Go to the abort point at a safe depth, then surface there (per `safety.on_violation`). The legs end by
+        `max_duration + abort_time` after the start at the latest (time a pilot held the vehicle excepted)."""
         nav = self.vehicle.observe().nav
         self.report.aborted, self.report.abort_reason = True, reason
         self.emit("abort", nav.time, reason=reason, abort_to=policy_record(self.mission)["abort_to"])
+        safety = self.mission.safety
+        deadline = self.report.start_time + self.report.paused_s + safety.max_duration + safety.abort_time
         for leg_id, params in abort_legs(self.mission, nav, self.usbl_available):
             element = RouteElement(id=leg_id, transit=params)
-            self.report.elements.append(self._run(leg_id, "transit", TransitAgent(params), element, aborting=True))
+            self.report.elements.append(self._run(leg_id, "transit", TransitAgent(params), element, aborting=True,
+                                                  deadline=deadline))
 
     def run(self) -> ExecutionReport:
         """Run the whole route; returns what happened (the event log has the details)."""

@@ -156,7 +156,8 @@ class Safety(Strict):
     geofence: Polygon | None = None
     max_depth: Annotated[float, between(0.0, L.MAX_DEPTH_M, open_low=True)] = 300.0
     min_altitude: Altitude = 1.0
-    max_duration: Annotated[Time, Field(ge=1.0)] = 6 * 3600.0  # a hard stop: abort legs end by it too
+    max_duration: Annotated[Time, Field(ge=1.0)] = 6 * 3600.0  # the route stops here (the abort then has abort_time)
+    abort_time: Annotated[Time, Field(ge=1.0)] = 1800.0  # the longest an abort may run past max_duration
     energy_reserve: Percent = 20.0
     on_violation: OnViolation = OnViolation()
     # onboard: no heartbeat from the vehicle for this long is a lost link
