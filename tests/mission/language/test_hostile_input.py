@@ -1,5 +1,5 @@
-"""Hostile files given to `auv validate`: each ends within the time bound and the memory limit (see conftest), with
-exit code 1, a located message (FILE:LINE:COL) that says what was refused, and no traceback. Large inputs are
+"""Hostile files given to `auv validate`: each ends within the time bound and the memory limit (`hostile_support`),
+with exit code 1, a located message (FILE:LINE:COL) that says what was refused, and no traceback. Large inputs are
 generated once per session, never stored."""
 
 from __future__ import annotations
@@ -9,6 +9,7 @@ import re
 from pathlib import Path
 
 import pytest
+from hostile_support import run_auv, write_tiny
 
 from mission.language import limits
 
@@ -26,6 +27,11 @@ def assert_refused(outcome, file: Path | str, text: str) -> None:
     assert "Traceback" not in outcome.output, outcome.output[-3000:]
     assert outcome.code == 1, outcome.output[-3000:]
     assert located(outcome.output, file, text), outcome.output[-3000:]
+
+
+@pytest.fixture
+def tiny(tmp_path: Path) -> Path:
+    return write_tiny(tmp_path)
 
 
 @pytest.fixture(scope="session")
@@ -48,58 +54,58 @@ def corpus(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return folder
 
 
-def test_an_alias_bomb_is_refused_while_parsing(auv, corpus):
+def test_an_alias_bomb_is_refused_while_parsing(corpus):
     path = corpus / "alias_bomb.yaml"
-    assert_refused(auv("validate", path), path, "aliases expanded")
+    assert_refused(run_auv("validate", path), path, "aliases expanded")
 
 
-def test_ten_thousand_nested_brackets_are_refused_at_the_nesting_limit(auv, corpus):
+def test_ten_thousand_nested_brackets_are_refused_at_the_nesting_limit(corpus):
     path = corpus / "nested.yaml"
-    outcome = auv("validate", path)
+    outcome = run_auv("validate", path)
     assert_refused(outcome, path, f"nesting deeper than {limits.MAX_DEPTH} levels")
     assert f"{path}:2:{7 + limits.MAX_DEPTH}:" in outcome.output  # the bracket past the limit (the top is level 1)
 
 
-def test_a_million_short_lists_are_refused_at_the_list_length_limit(auv, corpus):
+def test_a_million_short_lists_are_refused_at_the_list_length_limit(corpus):
     path = corpus / "short_lists.yaml"
-    assert_refused(auv("validate", path), path, f"more than {limits.MAX_ITEMS:,} entries")
+    assert_refused(run_auv("validate", path), path, f"more than {limits.MAX_ITEMS:,} entries")
 
 
-def test_a_file_over_the_size_cap_is_refused_before_it_is_read(auv, corpus):
+def test_a_file_over_the_size_cap_is_refused_before_it_is_read(corpus):
     path = corpus / "huge.yaml"
     assert path.stat().st_size > limits.MAX_FILE_BYTES
-    assert_refused(auv("validate", path), path, "are refused")
+    assert_refused(run_auv("validate", path), path, "are refused")
 
 
-def test_a_geofence_of_a_million_points_is_refused(auv, corpus):
+def test_a_geofence_of_a_million_points_is_refused(corpus):
     path = corpus / "fence_1e6.yaml"
-    assert_refused(auv("validate", path), path, "are refused")  # 10 MB: over the size cap
+    assert_refused(run_auv("validate", path), path, "are refused")  # 10 MB: over the size cap
 
 
-def test_a_geofence_of_six_thousand_points_is_refused_by_the_schema(auv, corpus):
+def test_a_geofence_of_six_thousand_points_is_refused_by_the_schema(corpus):
     path = corpus / "fence_6000.yaml"
-    assert_refused(auv("validate", path), path, f"at most {limits.MAX_POLYGON_VERTICES} items")
+    assert_refused(run_auv("validate", path), path, f"at most {limits.MAX_POLYGON_VERTICES} items")
 
 
-def test_a_fifo_is_refused_without_blocking(auv, tmp_path):
+def test_a_fifo_is_refused_without_blocking(tmp_path):
     fifo = tmp_path / "mission.yaml"
     os.mkfifo(fifo)
-    assert_refused(auv("validate", fifo), fifo, "FIFO")
+    assert_refused(run_auv("validate", fifo), fifo, "FIFO")
 
 
 @pytest.mark.parametrize("device", ["/dev/zero", "/dev/urandom", "/proc/self/status", "/proc/self/mem"])
-def test_devices_and_kernel_files_are_refused(auv, device):
-    assert_refused(auv("validate", device), device, "system file")
+def test_devices_and_kernel_files_are_refused(device):
+    assert_refused(run_auv("validate", device), device, "system file")
 
 
-def test_a_folder_is_refused(auv, tmp_path):
-    assert_refused(auv("validate", tmp_path), tmp_path, "is a folder")
+def test_a_folder_is_refused(tmp_path):
+    assert_refused(run_auv("validate", tmp_path), tmp_path, "is a folder")
 
 
-def test_a_binary_file_is_refused_as_not_text(auv, tmp_path):
+def test_a_binary_file_is_refused_as_not_text(tmp_path):
     path = tmp_path / "mission.yaml"
     path.write_bytes(b"name: x\n\xff\xfe\x00binary")
-    assert_refused(auv("validate", path), path, "not UTF-8 text")
+    assert_refused(run_auv("validate", path), path, "not UTF-8 text")
 
 
 @pytest.mark.parametrize("document, line", [
@@ -112,72 +118,72 @@ def test_a_binary_file_is_refused_as_not_text(auv, tmp_path):
     ("name: x\n" + SENSORS + "seed: !!binary aGVsbG8=\n" + ROUTE, 4),
     ("name: x\n" + SENSORS + "seed: !custom 3\n" + ROUTE, 4),
 ], ids=["mapping", "sequence", "document", "scalar", "list-item", "set", "binary", "local-tag"])
-def test_a_tag_on_any_node_is_refused(auv, tmp_path, document, line):
+def test_a_tag_on_any_node_is_refused(tmp_path, document, line):
     path = tmp_path / "mission.yaml"
     path.write_text(document)
-    outcome = auv("validate", path)
+    outcome = run_auv("validate", path)
     assert_refused(outcome, path, "is not allowed")
     assert re.search(rf"^{re.escape(str(path))}:{line}:\d+: document refused: the tag", outcome.output, re.M)
 
 
-def test_a_recursive_alias_is_refused(auv, tmp_path):
+def test_a_recursive_alias_is_refused(tmp_path):
     path = tmp_path / "mission.yaml"
     path.write_text("name: x\n" + SENSORS + "route: &r [*r]\n")
-    assert_refused(auv("validate", path), path, "a node that contains it")
+    assert_refused(run_auv("validate", path), path, "a node that contains it")
 
 
-def test_a_world_path_to_a_non_world_file_names_the_path_and_never_quotes_the_file(auv, tmp_path):
+def test_a_world_path_to_a_non_world_file_names_the_path_and_never_quotes_the_file(tmp_path):
     secret = tmp_path / "shadow"
     secret.write_text("root: $6$s3cr3t-hash-line\nSecretKey: hunter2-token\ndaemon: '*'\n")
     path = tmp_path / "mission.yaml"
     path.write_text(f"name: x\nworld: {secret}\n{SENSORS}{ROUTE}")
-    outcome = auv("validate", path)
+    outcome = run_auv("validate", path)
     assert_refused(outcome, path, "is not a world file")
     for word in ("s3cr3t", "hunter2", "SecretKey", "daemon"):
         assert word not in outcome.output
 
 
 @pytest.mark.parametrize("target", ["/dev/zero", "/proc/self/environ", "fifo", "."])
-def test_a_world_path_to_a_device_fifo_or_folder_is_refused_at_the_world_key(auv, tmp_path, target):
+def test_a_world_path_to_a_device_fifo_or_folder_is_refused_at_the_world_key(tmp_path, target):
     if target == "fifo":
         os.mkfifo(tmp_path / "fifo")
     path = tmp_path / "mission.yaml"
     path.write_text(f"name: x\nworld: {target}\n{SENSORS}{ROUTE}")
-    outcome = auv("validate", path)
+    outcome = run_auv("validate", path)
     assert_refused(outcome, path, "cannot be used")
     assert f"{path}:2:8:" in outcome.output
 
 
-def test_a_model_path_to_a_fifo_is_refused_at_the_model_key(auv, tmp_path):
+def test_a_model_path_to_a_fifo_is_refused_at_the_model_key(tmp_path):
     os.mkfifo(tmp_path / "model.yaml")
     path = tmp_path / "mission.yaml"
     path.write_text(f"name: x\n{SENSORS}objects:\n  - id: o\n    pose: {{north: 0, east: 0, depth: 10}}\n"
                     f"    size: [1, 1, 1]\n    model: model.yaml\n{ROUTE}")
-    assert_refused(auv("validate", path), path, "FIFO")
+    assert_refused(run_auv("validate", path), path, "FIFO")
 
 
-def test_a_transit_faster_than_the_vehicle_is_refused_at_its_speed(auv, tiny):
+def test_a_transit_faster_than_the_vehicle_is_refused_at_its_speed(tiny):
     tiny.write_text(tiny.read_text().replace("speed: 1.0", "speed: 3.0"))
-    outcome = auv("validate", tiny)
+    outcome = run_auv("validate", tiny)
     assert_refused(outcome, tiny, "exceeds vehicle.max_speed 2 m/s")
     assert f"{tiny}:22:" in outcome.output
 
 
-def test_a_seabed_resolution_of_1e_300_is_refused_in_the_world_file(auv, tiny):
+def test_a_seabed_resolution_of_1e_300_is_refused_in_the_world_file(tiny):
     world = tiny.parent / "tiny_world.yaml"
     world.write_text(world.read_text().replace("resolution: 1.0", "resolution: 1e-300"))
-    assert_refused(auv("validate", tiny), world, "seabed.resolution")
+    assert_refused(run_auv("validate", tiny), world, "seabed.resolution")
 
 
-def test_a_seabed_grid_over_the_cell_limit_is_refused(auv, tiny):
+def test_a_seabed_grid_over_the_cell_limit_is_refused(tiny):
     world = tiny.parent / "tiny_world.yaml"
     world.write_text(world.read_text().replace("resolution: 1.0", "resolution: 0.05"))
-    assert_refused(auv("validate", tiny), world, "cells is too large")
+    assert_refused(run_auv("validate", tiny), world, "cells is too large")
 
 
-def test_a_survey_of_a_million_lines_is_refused(auv, tiny):
+def test_a_survey_of_a_million_lines_is_refused(tiny):
     tiny.write_text(tiny.read_text().replace("  usbl:", "  mbes: {swath_deg: 1}\n  usbl:") + """\
   - id: mow
     survey: {area: [[-40, -40], [-40, 40], [40, 40], [40, -40]], altitude: 1.0, overlap: 90%}
 """)
-    assert_refused(auv("validate", tiny), tiny, "lines (at most")
+    assert_refused(run_auv("validate", tiny), tiny, "lines (at most")

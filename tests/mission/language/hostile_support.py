@@ -1,4 +1,4 @@
-"""Fixtures of the hostile-input corpus: the real `auv` command in a subprocess, under a memory limit and a time
+"""Support of the hostile-input corpus: the real `auv` command in a subprocess, under a memory limit and a time
 bound, and a tiny mission with a tiny world that simulates in a second or two."""
 
 from __future__ import annotations
@@ -6,7 +6,6 @@ from __future__ import annotations
 import resource
 import subprocess
 import sys
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -82,15 +81,9 @@ def run_auv(*args: str | Path, cwd: Path | None = None) -> Outcome:
     return Outcome(done.returncode, done.stdout + done.stderr)
 
 
-@pytest.fixture(scope="session")
-def auv() -> Callable[..., Outcome]:
-    return run_auv
-
-
-@pytest.fixture
-def tiny(tmp_path: Path) -> Path:
+def write_tiny(folder: Path) -> Path:
     """A tiny valid mission (one short transit, a one-minute limit) beside its tiny world; its path."""
-    (tmp_path / "tiny_world.yaml").write_text(TINY_WORLD, encoding="utf-8")
-    path = tmp_path / "tiny.yaml"
+    (folder / "tiny_world.yaml").write_text(TINY_WORLD, encoding="utf-8")
+    path = folder / "tiny.yaml"
     path.write_text(TINY_MISSION, encoding="utf-8")
     return path
