@@ -91,6 +91,11 @@ def default_timeout(element: RouteElement, nav: NavState, mission: Mission) -> f
     return float(budget) * 1.2 + MARGIN_S if budget is not None else mission.safety.max_duration
 
 
+def hard_stop(mission: Mission) -> float:
+    """Seconds after its start by which a run has ended, abort included: `max_duration + abort_time`."""
+    return mission.safety.max_duration + mission.safety.abort_time
+
+
 def unsupported_elements(mission: Mission, agents: Mapping[str, object] | None = None) -> list[RouteElement]:
     """The route elements whose kind has no agent (in `agents`, by default the registry)."""
     kinds = REGISTRY if agents is None else agents
@@ -136,12 +141,10 @@ class Executive:
         return found
 
     def _run(self, element_id: str, kind: str, agent: Agent, element: RouteElement, aborting: bool,
-             deadline: float | None = None) -> ElementReport:
+             deadline: float = math.inf) -> ElementReport:
         nav = self.vehicle.observe().nav
         rep = ElementReport(element_id, kind, ElementStatus.RUNNING, start_time=nav.time)
-        timeout = default_timeout(element, nav, self.mission)
-        if deadline is not None:  # a hard end of the run (abort legs): the element has what time is left
-            timeout = min(timeout, max(deadline - nav.time, 0.0))
+        timeout = min(default_timeout(element, nav, self.mission), max(deadline - nav.time, 0.0))
         try:
             agent.start(AgentContext(self.mission, element, nav, self.emit, self.report.knowledge, self.plugins,
                                      self.artifacts))
@@ -244,13 +247,12 @@ class Executive:
                 self.on_tick(nav)
 
     def _abort(self, reason: str) -> None:
-        """Go to the abort point at a safe depth, then surface there (per `safety.on_violation`). The legs end by
-        `max_duration + abort_time` after the start at the latest (time a pilot held the vehicle excepted)."""
+        """Go to the abort point at a safe depth, then surface there (per `safety.on_violation`), by the run's hard
+        end: `max_duration + abort_time` after the start (time a pilot held the vehicle excepted)."""
         nav = self.vehicle.observe().nav
         self.report.aborted, self.report.abort_reason = True, reason
         self.emit("abort", nav.time, reason=reason, abort_to=policy_record(self.mission)["abort_to"])
-        safety = self.mission.safety
-        deadline = self.report.start_time + self.report.paused_s + safety.max_duration + safety.abort_time
+        deadline = self.report.start_time + self.report.paused_s + hard_stop(self.mission)
         for leg_id, params in abort_legs(self.mission, nav, self.usbl_available):
             element = RouteElement(id=leg_id, transit=params)
             self.report.elements.append(self._run(leg_id, "transit", TransitAgent(params), element, aborting=True,
