@@ -27,9 +27,8 @@ def _validate(args: argparse.Namespace) -> int:
             print(d)
         if args.estimate and mission is not None:
             from mission.cli_plan import print_estimate
-            from mission.estimate import estimate_mission
 
-            print_estimate(estimate_mission(mission), args.json)
+            print_estimate(mission, args.json)
         errors = sum(1 for d in diags if not d.warning)
         warnings = len(diags) - errors
         if errors:

@@ -21,6 +21,7 @@ site), when it names one.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -86,9 +87,11 @@ class _Where:
 
 
 class _Site:
-    """What a designer knows of the site: the seabed depth (charted, objects left out) and the current."""
+    """What a designer knows of the site: the seabed depth (charted, objects left out) and the current; and the
+    survey plans made so far (a plan depends on where the survey begins only through its first line)."""
 
     def __init__(self, mission: Mission):
+        self.plans: dict[str, Any] = {}
         self.seabed: Any = None
         self.current = (0.0, 0.0)
         if mission.world is not None:
@@ -104,15 +107,34 @@ class _Site:
         return max(float(self.seabed.depth_at(north, east)) - altitude, 0.0)
 
 
-def estimate_mission(mission: Mission) -> MissionEstimate:
-    """The estimate of every route element, in order, and warnings against `max_duration` and the energy
-    reserve."""
-    site = _Site(mission)
-    here = _Where(mission.home.north, mission.home.east, mission.home.depth)
-    out: list[ElementEstimate] = []
-    for element in mission.route:
-        out.append(_element(mission, site, element, here))
-    estimate = MissionEstimate(out)
+class RouteEstimator:
+    """Estimates of route elements flown in a given order from a given position (the strategic level re-plans
+    with it; `estimate_mission` gives the whole route's)."""
+
+    def __init__(self, mission: Mission):
+        self.mission = mission
+        self.site = _Site(mission)
+
+    def route(self, elements: Sequence[RouteElement], north: float, east: float,
+              depth: float) -> list[ElementEstimate]:
+        here = _Where(north, east, depth)
+        return [_element(self.mission, self.site, element, here) for element in elements]
+
+    def end_of(self, element: RouteElement, north: float, east: float, depth: float) -> tuple[float, float, float]:
+        """Where the vehicle will be after `element`, begun at (north, east, depth)."""
+        here = _Where(north, east, depth)
+        _element(self.mission, self.site, element, here)
+        return here.north, here.east, here.depth
+
+
+def estimate_mission(mission: Mission, route: Sequence[RouteElement] | None = None,
+                     estimator: RouteEstimator | None = None) -> MissionEstimate:
+    """The estimate of every element of `route` (default: the mission's, as listed) from the home position, and
+    warnings against `max_duration` and the energy reserve."""
+    home = mission.home
+    estimator = estimator or RouteEstimator(mission)
+    estimate = MissionEstimate(estimator.route(mission.route if route is None else route,
+                                               home.north, home.east, home.depth))
     safety = mission.safety
     if estimate.duration_s > safety.max_duration:
         estimate.warnings.append(f"the estimated duration {estimate.duration_s / 60:.0f} min exceeds max_duration "
@@ -219,9 +241,11 @@ def _survey(mission: Mission, site: _Site, ident: str, p: Survey, here: _Where) 
     mbes = mission.sensors.mbes
     if mbes is None:
         return ElementEstimate(ident, "survey", 0.0, 0.0, 0.0, "plan")
-    spacing = line_spacing(p.altitude, mbes.swath_deg, p.overlap)
-    plan = meander(p.area, p.exclude, spacing=spacing, heading=p.heading, turn_radius=mission.vehicle.turn_radius,
-                   start=(here.north, here.east))
+    plan = site.plans.get(ident)
+    if plan is None:
+        spacing = line_spacing(p.altitude, mbes.swath_deg, p.overlap)
+        plan = site.plans[ident] = meander(p.area, p.exclude, spacing=spacing, heading=p.heading,
+                                           turn_radius=mission.vehicle.turn_radius, start=(here.north, here.east))
     speed = p.speed or mission.vehicle.cruise_speed
     first = plan.waypoints[0]
     approach = math.hypot(first[0] - here.north, first[1] - here.east)
@@ -268,4 +292,4 @@ def coverage_of(estimate: MissionEstimate) -> dict[str, float]:
     return {e.id: e.coverage_percent for e in estimate.elements if e.coverage_percent is not None}
 
 
-__all__ = ["ElementEstimate", "MissionEstimate", "estimate_mission", "leg_time", "vertical_time"]
+__all__ = ["ElementEstimate", "MissionEstimate", "RouteEstimator", "estimate_mission", "leg_time", "vertical_time"]

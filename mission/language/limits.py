@@ -17,9 +17,10 @@ PSEUDO_FILE_ROOTS = ("/proc", "/sys", "/dev")  # kernel and device files are nev
 # Collections in the schema.
 MAX_POLYGON_VERTICES = 5_000  # geofence, survey areas, no-go zones
 MAX_EXCLUSION_ZONES = 100
-MAX_POINTS_PER_SET = 10_000
+MAX_POINTS_PER_SET = 1_000
+MAX_POINTS_PER_OBJECT = 1_000  # characteristic points of one object, all sets together
 MAX_POINT_SETS = 100
-MAX_TARGETS = 1_000
+MAX_TARGETS = 100  # per object (each target's viewpoint is checked against the object's points)
 MAX_OBJECTS = 1_000
 MAX_ROUTE_ELEMENTS = 10_000
 MAX_OFFSETS = 100

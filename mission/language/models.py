@@ -197,6 +197,14 @@ class KnownObject(Strict):
     model: str | None = Field(None, description="multi-view model file (`auv model build`), relative to the "
                                                 "mission file; the loader resolves it to an absolute path")
 
+    @model_validator(mode="after")
+    def _points_within_limit(self) -> KnownObject:
+        count = sum(len(s.points) for s in self.characteristic_points)
+        if count > L.MAX_POINTS_PER_OBJECT:
+            raise ValueError(f"object '{self.id}' has {count} characteristic points (at most "
+                             f"{L.MAX_POINTS_PER_OBJECT} in all its sets)")
+        return self
+
 
 class Point(Strict):
     north: Coordinate
@@ -292,6 +300,7 @@ class RouteElement(Strict):
     actions: Annotated[list[Action], Field(max_length=20)] = []
     timeout: Annotated[Time, Field(gt=0)] | None = None
     on_failure: Literal["continue", "abort"] = "continue"
+    priority: Annotated[int, Field(ge=-100, le=100)] = 0  # when the budget falls short, the lowest is dropped first
 
     @model_validator(mode="after")
     def _exactly_one_kind(self) -> RouteElement:
@@ -310,6 +319,14 @@ class RouteElement(Strict):
         return getattr(self, self.kind)  # type: ignore[no-any-return]
 
 
+class Strategy(Strict):
+    """The strategic level (seed 002 §1, `mission.strategy`): the order of the work bound to known objects, and
+    the share of the time and energy budgets kept in hand when it decides what fits."""
+
+    order: Literal["auto", "as-listed"] = "auto"
+    budget_margin: Percent = 10.0
+
+
 class Mission(Strict):
     """A whole mission. The loader resolves `world` to an absolute path and records the source file."""
 
@@ -323,6 +340,7 @@ class Mission(Strict):
     sensors: Sensors = Sensors()
     plugins: Plugins = Plugins()
     safety: Safety = Safety()
+    strategy: Strategy = Strategy()
     objects: Annotated[list[KnownObject], Field(max_length=L.MAX_OBJECTS)] = []
     route: Annotated[list[RouteElement], Field(min_length=1, max_length=L.MAX_ROUTE_ELEMENTS)]
     _source: str | None = PrivateAttr(default=None)
