@@ -93,9 +93,15 @@ def default_timeout(element: RouteElement, nav: NavState, mission: Mission) -> f
     return float(budget) * 1.2 + MARGIN_S if budget is not None else mission.safety.max_duration
 
 
-def hard_stop(mission: Mission) -> float:
-    """Seconds after its start by which a run has ended, abort included: `max_duration + abort_time`."""
-    return mission.safety.max_duration + mission.safety.abort_time
+def timeout_for(element: RouteElement, nav: NavState, mission: Mission, abort_of: ExecutionReport | None = None
+                ) -> float:
+    """`default_timeout`, and for a leg of an abort (`abort_of`: the run's report) no later than the run's hard end,
+    `max_duration + abort_time` after its start (time a pilot held the vehicle excepted)."""
+    timeout = default_timeout(element, nav, mission)
+    if abort_of is None:
+        return timeout
+    end = abort_of.start_time + abort_of.paused_s + mission.safety.max_duration + mission.safety.abort_time
+    return min(timeout, max(end - nav.time, 0.0))
 
 
 def unsupported_elements(mission: Mission, agents: Mapping[str, object] | None = None) -> list[RouteElement]:
@@ -142,11 +148,11 @@ class Executive:
             self.emit("safety_violation", nav.time, **{k: val for k, val in record.items() if k != "time"})
         return found
 
-    def _run(self, element_id: str, kind: str, agent: Agent, element: RouteElement, aborting: bool,
-             deadline: float = math.inf) -> ElementReport:
+    def _run(self, element_id: str, kind: str, agent: Agent, element: RouteElement, aborting: bool
+             ) -> ElementReport:
         nav = self.vehicle.observe().nav
         rep = ElementReport(element_id, kind, ElementStatus.RUNNING, start_time=nav.time)
-        timeout = min(default_timeout(element, nav, self.mission), max(deadline - nav.time, 0.0))
+        timeout = timeout_for(element, nav, self.mission, self.report if aborting else None)
         try:
             agent.start(AgentContext(self.mission, element, nav, self.emit, self.report.knowledge, self.plugins,
                                      self.artifacts))
@@ -249,16 +255,13 @@ class Executive:
                 self.on_tick(nav)
 
     def _abort(self, reason: str) -> None:
-        """Go to the abort point at a safe depth, then surface there (per `safety.on_violation`), by the run's hard
-        end: `max_duration + abort_time` after the start (time a pilot held the vehicle excepted)."""
+        """Go to the abort point at a safe depth, then surface there (per `safety.on_violation`)."""
         nav = self.vehicle.observe().nav
         self.report.aborted, self.report.abort_reason = True, reason
         self.emit("abort", nav.time, reason=reason, abort_to=policy_record(self.mission)["abort_to"])
-        deadline = self.report.start_time + self.report.paused_s + hard_stop(self.mission)
         for leg_id, params in abort_legs(self.mission, nav, self.usbl_available):
             element = RouteElement(id=leg_id, transit=params)
-            self.report.elements.append(self._run(leg_id, "transit", TransitAgent(params), element, aborting=True,
-                                                  deadline=deadline))
+            self.report.elements.append(self._run(leg_id, "transit", TransitAgent(params), element, aborting=True))
 
     def run(self) -> ExecutionReport:
         """Run the whole route; returns what happened (the event log has the details)."""
