@@ -10,8 +10,10 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
+import pydantic
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
+from mission import geodesy
 from mission.language import limits as L
 from mission.language.units import Duration, Percent
 
@@ -25,8 +27,35 @@ def between(low: float, high: float, *, open_low: bool = False) -> Any:
 Coordinate = Annotated[float, between(-L.MAX_EXTENT, L.MAX_EXTENT)]  # north, east (m) in the local frame
 Vec2 = tuple[Coordinate, Coordinate]
 Vec3 = tuple[Coordinate, Coordinate, Coordinate]
-Polygon = Annotated[list[Vec2], Field(min_length=3, max_length=L.MAX_POLYGON_VERTICES,
-                                      description="[[north, east], ...] in metres")]
+
+
+def _unplaced_geodetic(value: object) -> object:
+    """A `{lat, lon}` point still here was not converted by `Mission` (see `mission.geodesy.localize`): say why."""
+    if geodesy.is_geodetic(value):
+        if not geodesy.valid_geodetic(value):
+            raise ValueError("a geodetic point is {lat, lon} with lat in [-90, 90] and lon in [-180, 180] (degrees)")
+        raise ValueError("a {lat, lon} point needs the mission's `origin: {lat, lon}` to place it in the local frame")
+    return value
+
+
+_GEODETIC_SCHEMA = {"type": "object", "additionalProperties": False, "required": ["lat", "lon"],
+                    "properties": {"lat": {"type": "number", "minimum": -90, "maximum": 90},
+                                   "lon": {"type": "number", "minimum": -180, "maximum": 180}}}
+
+
+def _or_geodetic(schema: dict[str, Any]) -> None:
+    local = dict(schema)
+    schema.clear()
+    schema["anyOf"] = [local, _GEODETIC_SCHEMA]
+
+
+# A point of a polygon: [north, east] metres, or {lat, lon} degrees that `Mission` converts with its `origin`.
+PlanePoint = Annotated[Vec2, pydantic.BeforeValidator(_unplaced_geodetic), pydantic.WithJsonSchema({"anyOf": [
+    {"type": "array", "prefixItems": [{"type": "number"}, {"type": "number"}], "minItems": 2, "maxItems": 2},
+    _GEODETIC_SCHEMA]})]
+Polygon = Annotated[list[PlanePoint], Field(min_length=3, max_length=L.MAX_POLYGON_VERTICES,
+                                            description="[[north, east], ...] in metres, or {lat, lon} points "
+                                                        "(degrees, WGS84)")]
 Identifier = Annotated[str, Field(min_length=1, max_length=200, pattern=r"^[A-Za-z0-9_.\-]+$")]
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
@@ -49,7 +78,7 @@ class Strict(BaseModel):
 
 
 class Origin(Strict):
-    """Geodetic origin of the local NED frame (used for exports only)."""
+    """Geodetic origin (WGS84 degrees) of the local NED frame: exports and `{lat, lon}` points need it."""
 
     lat: Annotated[float, between(-90, 90)]
     lon: Annotated[float, between(-180, 180)]
@@ -207,8 +236,17 @@ class KnownObject(Strict):
 
 
 class Point(Strict):
+    """A point in the local frame; `{lat, lon}` is accepted too and converted with the mission's `origin`."""
+
+    model_config = ConfigDict(json_schema_extra=lambda schema: _or_geodetic(schema))
+
     north: Coordinate
     east: Coordinate
+
+    @model_validator(mode="before")
+    @classmethod
+    def _geodetic_placed(cls, data: object) -> object:
+        return _unplaced_geodetic(data)
 
 
 class Transit(Strict):
@@ -332,7 +370,7 @@ class Mission(Strict):
 
     name: Identifier
     description: str = ""
-    origin: Origin = Origin(lat=0.0, lon=0.0)
+    origin: Origin | None = None  # required by exports and by `{lat, lon}` points; never assumed
     world: str | None = None
     seed: Seed = 0
     home: Home = Home()
@@ -344,6 +382,11 @@ class Mission(Strict):
     objects: Annotated[list[KnownObject], Field(max_length=L.MAX_OBJECTS)] = []
     route: Annotated[list[RouteElement], Field(min_length=1, max_length=L.MAX_ROUTE_ELEMENTS)]
     _source: str | None = PrivateAttr(default=None)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _geodetic_to_local(cls, data: object) -> object:
+        return geodesy.localize(data)
 
     @property
     def source(self) -> str | None:
