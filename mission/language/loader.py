@@ -24,6 +24,7 @@ from mission.language.models import (
 )
 from mission.language.reading import UnreadableFile, read_bounded
 from mission.language.source import Located, parse_yaml, read_yaml
+from mission.language.timing import duration_warning
 from mission.language.validation import validate_as
 from mission.language.world import World
 from mission.plugins import describe_installed, installed_plugins
@@ -268,6 +269,9 @@ def validate_mission_file(path: str | Path, environment: bool = True) -> tuple[M
     if mission is not None:
         mission._source = str(path)
     errors = [d for d in diags if not d.warning]
+    if mission is not None and not errors:
+        valid = mission
+        diags += _guarded(doc, lambda: duration_warning(doc, valid), list[Diagnostic]())
     return (mission if not errors else None), _capped(diags)
 
 
