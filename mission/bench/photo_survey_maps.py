@@ -1,6 +1,6 @@
 """Seeded survey worlds for `auv bench photo-survey`: a flat patch of seabed with 1–5 objects.
 
-A 40 × 40 m area (1 m information cells, the map 6 m wider on every side) on a flat seabed at 30 m. Each object is
+A 40 × 40 m area (1 m information cells, the map and the clearance grid 12 m wider on every side, room for the turns) on a flat seabed at 30 m. Each object is
 a box 2–7 m long, 1.5–5 m wide, 0.3–1.5 m tall at a random heading; in odd seeds one of them is a pillar
 (2 × 2 m, 12 m tall) that reaches through the survey depth, so the occupancy map matters. The information map
 is the seed's I = B∗G (`planners.infomap`) of the height map with 1 m navigation blur; the clearance grid is
@@ -20,7 +20,7 @@ from planners.rrt import ClearanceGrid, InformationField
 
 Array = NDArray[np.float64]
 SIZE_M = 40.0
-PAD_M = 6.0
+PAD_M = 12.0
 SEABED_M = 30.0
 ALTITUDE_M = 5.0
 DEPTH_M = SEABED_M - ALTITUDE_M

@@ -2,7 +2,8 @@
 
 The adapter between the pure RIG tree (`planners.rrt.rig`) and the world: motions are OMPL Dubins curves for the
 vehicle's turning radius (`DubinsStateSpace.interpolate`, sampled every 0.5 m), each one checked against the
-clearance grid at the survey depth (every sample's voxel must keep the safety distance) and kept inside the
+clearance grid at the survey depth (every sample's voxel must keep the safety distance plus a quarter metre, so
+the whole curve keeps the safety distance), ending where a full turning circle is clear, and kept inside the
 flight box (the area's bounding box grown by two turning radii); the information a motion reveals is the camera
 footprint's (`planners.rrt.photo_gain`), with diminishing returns for cells already photographed. Photographs
 are triggered along the path every along-track footprint × (1 − overlap), divided by 1 + gain·Î, as in the
@@ -101,7 +102,8 @@ def dubins_steer(radius: float, depth: float, box: tuple[float, float, float, fl
     base, _, _ = _ompl.load()
     space = base.DubinsStateSpace(float(radius))
     s0, s1, s = space.allocState(), space.allocState(), space.allocState()
-    free, north0, east0, cell, cols = _free_slice(box, depth, grid, safety)
+    # A point between two samples lies within half a sample spacing of one: its voxel keeps that much more.
+    free, north0, east0, cell, cols = _free_slice(box, depth, grid, safety + SAMPLE_M / 2.0)
     rows = len(free) // cols
     inv = 1.0 / cell
 
