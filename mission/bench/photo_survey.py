@@ -110,10 +110,11 @@ def run(quick: bool) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:
     rig, lawn, cover = summary["rig"], summary["lawnmower"], summary["coverage"]
 
     def ratio(key: str, ref: dict[str, Any]) -> float:
-        return round(rig[key] / ref[key], 2) if ref[key] > 0 else float("inf")
+        return round(float(rig[key]) / float(ref[key]), 2) if ref[key] > 0 else float("inf")
 
     def median_ratio(ref: str) -> float:
-        return round(statistics.median(r["rig"]["info_per_m"] / max(r[ref]["info_per_m"], 1e-3) for r in rows), 2)
+        return round(float(statistics.median(r["rig"]["info_per_m"] / max(r[ref]["info_per_m"], 1e-3)
+                                             for r in rows)), 2)
 
     ratios = {"info_per_m_vs_lawnmower": ratio("info_per_m_mean", lawn),
               "info_per_m_vs_coverage": ratio("info_per_m_mean", cover),

@@ -1,10 +1,10 @@
 """Seeded survey worlds for `auv bench photo-survey`: a flat patch of seabed with 1–5 objects.
 
-A 40 × 40 m area (1 m information cells, the map and the clearance grid 12 m wider on every side, room for the turns) on a flat seabed at 30 m. Each object is
-a box 2–7 m long, 1.5–5 m wide, 0.3–1.5 m tall at a random heading; in odd seeds one of them is a pillar
-(2 × 2 m, 12 m tall) that reaches through the survey depth, so the occupancy map matters. The information map
-is the seed's I = B∗G (`planners.infomap`) of the height map with 1 m navigation blur; the clearance grid is
-0.5 m voxels between 20 and 31 m depth.
+A 40 × 40 m area on a flat seabed at 30 m (1 m information cells; the map and the clearance grid reach 12 m past
+the area on every side, room for the turns). Each object is a box 2–7 m long, 1.5–5 m wide, 0.3–1.5 m tall at a
+random heading; in odd seeds one of them is a pillar (2 × 2 m, 12 m tall) that reaches through the survey depth,
+so the occupancy map matters. The information map is the seed's I = B∗G (`planners.infomap`) of the height map
+with 1 m navigation blur; the clearance grid is 0.5 m voxels between 20 and 31 m depth.
 """
 
 from __future__ import annotations

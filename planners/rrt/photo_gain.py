@@ -80,7 +80,7 @@ class PhotoModel:
         i = math.floor((north - f.north0) / f.cell + 0.5)
         j = math.floor((east - f.east0) / f.cell + 0.5)
         if 0 <= i < self.shape[0] and 0 <= j < self.shape[1]:
-            return self.info_list[i * self.shape[1] + j]
+            return float(self.info_list[i * self.shape[1] + j])
         return 0.0
 
     def zero_counts(self) -> Counts:

@@ -168,7 +168,7 @@ def _grow(root: Node, model: PhotoModel, steer: Steer, box: tuple[float, float, 
 def _sample(rng: np.random.Generator, model: PhotoModel, box: tuple[float, float, float, float],
             cdf: Array | None, informed: float) -> Array:
     if cdf is not None and rng.random() < informed:
-        flat = int(min(np.searchsorted(cdf, rng.random()), len(cdf) - 1))
+        flat = min(int(np.searchsorted(cdf, rng.random())), len(cdf) - 1)
         i, j = divmod(flat, model.shape[1])
         c = model.field.cell
         return np.array([model.field.north0 + (i + rng.uniform(-0.5, 0.5)) * c,

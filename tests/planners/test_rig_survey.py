@@ -8,12 +8,12 @@ import pytest
 
 pytest.importorskip("ompl")
 
+from turning import circumradii  # noqa: E402
+
 from planners.rrt import ClearanceGrid, InformationField, informative_survey_path, photo_survey_path  # noqa: E402
 from planners.rrt.information import resample  # noqa: E402
 from planners.rrt.photo import footprint  # noqa: E402
 from planners.rrt.photo_gain import PhotoModel, path_headings, truncate  # noqa: E402
-
-from turning import circumradii  # noqa: E402
 
 AREA = np.array([[0.0, 0.0], [0.0, 40.0], [40.0, 40.0], [40.0, 0.0]])
 DEPTH, ALTITUDE, RADIUS, SAFETY, BUDGET = 25.0, 5.0, 3.0, 1.0, 160.0
