@@ -25,7 +25,14 @@ from mission.agents.explore_region import Target, prior_map, survey_map_for
 from mission.agents.report import ExploredObject, ExploreReport
 from mission.agents.waypoints import PathFollower
 from mission.vehicle import Command, Observation
-from planners.rrt import ClearanceGrid, InformationField, PhotoSurvey, photo_survey_path
+from planners.rrt import (
+    ClearanceGrid,
+    InformationField,
+    InformativeSurvey,
+    PhotoSurvey,
+    informative_survey_path,
+    photo_survey_path,
+)
 
 MARGIN_M = 1.0
 NAV_MARGIN_M = 1.0
@@ -33,6 +40,9 @@ OVERLAP = 0.6
 GAIN = 2.0
 SURVEY_SPEED = 0.5  # m/s over the object: slow enough for sharp photographs
 TRIGGER_M = 0.6
+BUDGET_SHARE = 0.7  # of the element's time budget flown surveying (the rest: approaches and climbing away)
+COVERAGE_FLOOR = 0.2  # Î over the object's area is at least this: all of it is worth a photograph
+MIN_RADIUS_M = 1.0  # the Dubins radius used when the vehicle declares no turning radius
 
 
 def footprint_polygon(north: float, east: float, heading_deg: float, across: float, along: float) -> Polygon:
@@ -53,6 +63,20 @@ def target_area(t: Target, margin: float) -> np.ndarray:
                                                                                       (-1, 1))])
 
 
+def informative_plan(lawn: PhotoSurvey, area: np.ndarray, info: InformationField, grid: ClearanceGrid,
+                     budget: float, altitude: float, fov: tuple[float, float], radius: float, safe_distance: float,
+                     seed: int) -> PhotoSurvey | InformativeSurvey:
+    """The RIG plan over the area with the lawnmower's path length as its budget (capped by the element's time),
+    starting where the lawnmower starts; the lawnmower itself when the RIG finds no way (start not clear)."""
+    d = lawn.path[1, :2] - lawn.path[0, :2] if len(lawn.path) > 1 else np.array([1.0, 0.0])
+    plan = informative_survey_path(area, info, budget=budget, altitude=altitude, depth=float(lawn.path[0, 2]),
+                                   turning_radius=radius, start=lawn.path[0, :2],
+                                   start_heading_deg=math.degrees(math.atan2(d[1], d[0])), fov_deg=fov,
+                                   overlap=OVERLAP, gain=GAIN, coverage_floor=COVERAGE_FLOOR, clearance=grid,
+                                   safety_distance=safe_distance, seed=seed)
+    return plan if len(plan.path) > 1 else lawn
+
+
 class PhotoSurveyRun:
     """Drives the photo survey for `ExploreAgent` (which delegates `step` to it)."""
 
@@ -70,7 +94,7 @@ class PhotoSurveyRun:
         self.altitude = min(p.safe_distance + NAV_MARGIN_M, 0.9 * stereo.max_range)
         self.payload: frozenset[str] = frozenset()
         self.finished = False
-        self.plans: list[tuple[Target, PhotoSurvey, np.ndarray]] = []
+        self.plans: list[tuple[Target, PhotoSurvey | InformativeSurvey, np.ndarray]] = []
         for t in targets:
             area = target_area(t, MARGIN_M)
             products = survey_map_for(context.knowledge, t)
@@ -82,10 +106,13 @@ class PhotoSurveyRun:
             lo = np.array([t.north - 20.0, t.east - 20.0, depth - 8.0])
             hi = np.array([t.north + 20.0, t.east + 20.0, t.bottom_depth + 1.0])
             grid = ClearanceGrid.from_voxel_map(prior_map(products, lo, hi, 0.5), lo, hi, unknown="free")
-            plan = photo_survey_path(area, info, altitude=self.altitude, depth=depth, fov_deg=self.fov,
+            lawn = photo_survey_path(area, info, altitude=self.altitude, depth=depth, fov_deg=self.fov,
                                      overlap=OVERLAP, gain=GAIN, turning_radius=m.vehicle.turn_radius,
                                      clearance=grid, safety_distance=p.safe_distance, seed=m.seed)
-            self.plans.append((t, plan, area))
+            budget = min(lawn.length, p.budget * SURVEY_SPEED * BUDGET_SHARE / len(targets))
+            self.plans.append((t, informative_plan(lawn, area, info, grid, budget, self.altitude, self.fov,
+                                                   max(m.vehicle.turn_radius, MIN_RADIUS_M), p.safe_distance,
+                                                   m.seed), area))
         self.index = 0
         self.phase = "approach"
         self.speed = m.vehicle.cruise_speed
@@ -151,7 +178,8 @@ class PhotoSurveyRun:
             obj = Polygon([(e, n) for n, e in target_area(t, 0.0)])
             covered = shapely.union_all(shapes).intersection(obj).area / obj.area if shapes else 0.0
             objects.append(ExploredObject(t.id, t.source, round(t.north, 2), round(t.east, 2), {
-                            "photos": len(taken), "passes": len(plan.passes),
+                            "photos": len(taken), "planner": "rig" if isinstance(plan, InformativeSurvey)
+                            else "lawnmower",
                             "planned_photos": int(len(plan.photo_points)), "altitude_m": round(self.altitude, 2),
                             "planned_length_m": round(plan.length, 1),
                             "photo_coverage_percent": round(100.0 * covered, 2)}))

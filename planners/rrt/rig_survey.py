@@ -56,14 +56,16 @@ class InformativeSurvey:
 def informative_survey_path(area: ArrayLike, information: InformationField, *, budget: float, altitude: float,
                             depth: float, turning_radius: float, start: ArrayLike, start_heading_deg: float,
                             fov_deg: tuple[float, float] = (60.0, 45.0), overlap: float = 0.6, gain: float = 2.0,
-                            repeat: float = 0.5, clearance: ClearanceGrid | None = None,
+                            repeat: float = 0.5, coverage_floor: float = 0.0, clearance: ClearanceGrid | None = None,
                             safety_distance: float = 0.0, iterations: int = 100, horizon: float | None = None,
                             seed: int = 0) -> InformativeSurvey:
     """A path of at most `budget` metres from `start` (north, east) photographing the polygon `area`
     ([[north, east], …]) where its information is, denser over the most informative ground.
 
     `repeat` is ρ of `PhotoModel` (the share of a cell's information a further photograph still reveals);
-    `horizon` is the receding horizon's length (default: 8 turning radii, at least 40 m).
+    `horizon` is the receding horizon's length (default: 8 turning radii, at least 40 m). `coverage_floor`
+    raises Î inside the area to at least that value, so that blank parts of it are worth a photograph too (a
+    survey that must cover the object) while informative parts stay worth several.
     """
     poly = np.asarray(area, dtype=float).reshape(-1, 2)
     if len(poly) < 3:
@@ -71,15 +73,19 @@ def informative_survey_path(area: ArrayLike, information: InformationField, *, b
     if not budget > 0:
         raise ValueError(f"budget must be positive, got {budget}")
     across, along = footprint(altitude, fov_deg)
-    model = PhotoModel(information, across, along, repeat)
-    lo, hi = poly.min(axis=0), poly.max(axis=0)
-    grow = 2.0 * turning_radius
-    flight = (lo[0] - grow, hi[0] + grow, lo[1] - grow, hi[1] + grow)
-    rows, cols = model.shape
+    rows, cols = np.shape(information.values)
     ii, jj = np.meshgrid(np.arange(rows), np.arange(cols), indexing="ij")
     centres = np.stack([information.north0 + ii.ravel() * information.cell,
                         information.east0 + jj.ravel() * information.cell], axis=1)
     allowed = inside_polygon(poly, centres)
+    if coverage_floor > 0:
+        floored = np.where(allowed.reshape(rows, cols), np.maximum(information.normalised(), coverage_floor),
+                           information.normalised())
+        information = InformationField(floored, information.north0, information.east0, information.cell)
+    model = PhotoModel(information, across, along, repeat)
+    lo, hi = poly.min(axis=0), poly.max(axis=0)
+    grow = 2.0 * turning_radius
+    flight = (lo[0] - grow, hi[0] + grow, lo[1] - grow, hi[1] + grow)
     steer = dubins_steer(turning_radius, depth, flight, clearance, safety_distance)
     s = np.asarray(start, dtype=float).reshape(-1)
     pose: Pose = (float(s[0]), float(s[1]), math.radians(start_heading_deg))
