@@ -1,14 +1,19 @@
 """The photo survey of a flat object (seed 002 §2.2.1), the `explore` element with `planner: rrt-photo`.
 
 For each target, the down-looking stereo camera photographs the object's area (its footprint plus `MARGIN_M`)
-along `planners.rrt.photo_survey_path`: passes spaced by the camera footprint and the overlap, denser over the
-informative parts of the survey's information map, joined by Dubins turns for the turning radius (checked
-against the occupancy map seeded from the survey's height map, re-planned with RRT* when blocked). The camera
+along `planners.rrt.informative_survey_path`: a receding-horizon RIG tree over the survey's information map
+(Î over the area floored at `COVERAGE_FLOOR`, so all of it is worth a photograph and its informative parts
+several), Dubins curves for the turning radius checked against the occupancy map seeded from the survey's height
+map. Its path budget is the length of the spacing-scaled lawnmower over the same area
+(`planners.rrt.photo_survey_path`), capped by `BUDGET_SHARE` of the element's time budget at the survey speed;
+the lawnmower is flown instead when the RIG finds no clear way from its start. The camera
 flies `safe_distance + NAV_MARGIN_M` above the object's top (within the stereo range); photographs are triggered
 at the plan's photo points: the agent switches the camera on, takes the first pair that arrives with the
 *estimated* pose, and switches it off. `photo_coverage_percent` is the share of the object's area inside the
 union of the photographs' footprints, placed at their estimated poses. The pairs go into `Knowledge.maps` and
-`mission.sim.photos` writes them into the run folder (`photos/`) with their estimated and true poses.
+`mission.sim.photos` writes them into the run folder (`photos/`) with their estimated and true poses; the
+information map of each target's plan goes into the element's maps (`photo_info_K`, `photo_info_grid_K`: north0,
+east0, cell).
 """
 
 from __future__ import annotations
@@ -95,6 +100,7 @@ class PhotoSurveyRun:
         self.payload: frozenset[str] = frozenset()
         self.finished = False
         self.plans: list[tuple[Target, PhotoSurvey | InformativeSurvey, np.ndarray]] = []
+        self.fields: list[InformationField] = []
         for t in targets:
             area = target_area(t, MARGIN_M)
             products = survey_map_for(context.knowledge, t)
@@ -110,6 +116,7 @@ class PhotoSurveyRun:
                                      overlap=OVERLAP, gain=GAIN, turning_radius=m.vehicle.turn_radius,
                                      clearance=grid, safety_distance=p.safe_distance, seed=m.seed)
             budget = min(lawn.length, p.budget * SURVEY_SPEED * BUDGET_SHARE / len(targets))
+            self.fields.append(info)
             self.plans.append((t, informative_plan(lawn, area, info, grid, budget, self.altitude, self.fov,
                                                    max(m.vehicle.turn_radius, MIN_RADIUS_M), p.safe_distance,
                                                    m.seed), area))
@@ -194,6 +201,9 @@ class PhotoSurveyRun:
             "photo_index": index, "photo_path": np.concatenate([pl.path for _, pl, _ in self.plans]),
             "photo_points": np.concatenate([pl.photo_points for _, pl, _ in self.plans]),
             "photo_areas": np.stack([a for _, _, a in self.plans])}
+        for k, field in enumerate(self.fields):  # the information map each target's plan was made over
+            products[f"photo_info_{k}"] = np.asarray(field.values, dtype=float)
+            products[f"photo_info_grid_{k}"] = np.array([field.north0, field.east0, field.cell])
         if self.images:
             products["photo_left"] = np.stack([left for left, _ in self.images])
             products["photo_right"] = np.stack([right for _, right in self.images])

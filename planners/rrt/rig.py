@@ -18,8 +18,10 @@ One round grows a tree from the vehicle's pose:
 
 After `iterations` samples the round commits the branch to the node that revealed the most information per
 metre (at least `step` long; when nothing reveals anything, the branch towards the most informative unrevealed
-cell), and the next round starts at its end, until the path budget is spent. Everything random draws from one
-seeded generator: a plan repeats exactly for its seed.
+cell), and the next round starts at its end, until the path budget is spent or the information still unrevealed
+in the area (Σ Î·ρⁿ) is at most `enough` of the area's total (the budget is an upper bound: the rest would only
+add photographs of ground already photographed). Everything random draws from one seeded generator: a plan
+repeats exactly for its seed.
 """
 
 from __future__ import annotations
@@ -54,6 +56,7 @@ class RigSettings:
     k_near: int = 2
     prune_radius: float = 1.5
     informed: float = 0.6
+    enough: float = 0.2
     seed: int = 0
 
 
@@ -97,7 +100,11 @@ def plan_rig(start: Pose, model: PhotoModel, steer: Steer, box: tuple[float, flo
     root.info = model.add(root.counts, model.cells(*start))
     samples, photos = [root.samples], [root.photos]
     spent, rounds, nodes = 0.0, 0, 0
+    area = model.flat_info if allowed is None else model.flat_info * allowed
+    total = float(area.sum())
     while settings.budget - spent >= 1.0:
+        if float(np.sum(area * model.repeat ** root.counts.astype(float))) <= settings.enough * total:
+            break  # what is left unrevealed is not worth the rest of the budget
         horizon = min(settings.horizon, settings.budget - spent)
         tree = _grow(root, model, steer, box, settings, horizon, rng, allowed)
         rounds += 1

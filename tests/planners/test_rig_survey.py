@@ -59,8 +59,17 @@ def info_per_metre(field, path, photos, budget):
     return model.revealed(model.counts(q, path_headings(p, q))) / length
 
 
-def test_the_path_stays_within_the_budget_and_uses_most_of_it(survey):
-    assert BUDGET * 0.8 <= survey.length <= BUDGET + 1e-6
+def test_a_short_budget_is_flown_to_its_end_and_never_exceeded():
+    short = plan(budget=50.0)
+    assert 45.0 <= short.length <= 50.0 + 1e-6
+
+
+def test_it_stops_short_of_a_long_budget_once_the_information_is_photographed():
+    _, _, field = world()
+    long = plan(budget=1000.0)
+    model = PhotoModel(field, *long.footprint)
+    counts = model.counts(long.photo_points, np.radians(long.photo_headings_deg))
+    assert model.high_share(counts) >= 0.95 and long.length < 400.0
 
 
 def test_no_point_of_the_path_comes_within_the_safety_distance_of_the_pillar(survey):
