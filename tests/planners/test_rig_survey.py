@@ -101,9 +101,10 @@ def test_informative_ground_is_photographed_more_often_than_blank_ground(survey)
     _, _, field = world()
     model = PhotoModel(field, *survey.footprint)
     counts = model.counts(survey.photo_points, np.radians(survey.photo_headings_deg)).reshape(model.shape)
-    assert counts[37:41, 36:42].min() >= 2 and counts[18:22, 14:20].min() >= 2
+    patches = np.concatenate([counts[37:41, 36:42].ravel(), counts[18:22, 14:20].ravel()])
+    assert np.mean(patches >= 2) >= 0.9
     blank = counts[10:50, 10:50][field.normalised()[10:50, 10:50] < 0.05]
-    assert counts[37:41, 36:42].mean() > 2.0 * blank.mean()
+    assert patches.mean() > 3.0 * blank.mean()
 
 
 def test_a_plan_repeats_exactly_for_its_seed(survey):
