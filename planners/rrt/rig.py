@@ -17,11 +17,12 @@ One round grows a tree from the vehicle's pose:
    cost and at least as much information; a node whose cost reaches the horizon is closed (never extended).
 
 After `iterations` samples the round commits the branch to the node that revealed the most information per
-metre (at least `step` long; when nothing reveals anything, the branch towards the most informative unrevealed
-cell), and the next round starts at its end, until the path budget is spent or the information still unrevealed
-in the area (Σ Î·ρⁿ) is at most `enough` of the area's total (the budget is an upper bound: the rest would only
-add photographs of ground already photographed). Everything random draws from one seeded generator: a plan
-repeats exactly for its seed.
+metre (at least `step` long), and the next round starts at its end. When no node reveals anything, the round is
+grown again with twice the horizon (up to the budget left); when even that finds nothing, the branch towards the
+most informative unrevealed cell is committed. Rounds go on until the path budget is spent or the information
+still unrevealed in the area (Σ Î·ρⁿ) is at most `enough` of the area's total (the budget is an upper bound: the
+rest would only add photographs of ground already photographed). Everything random draws from one seeded
+generator: a plan repeats exactly for its seed.
 """
 
 from __future__ import annotations
@@ -102,14 +103,20 @@ def plan_rig(start: Pose, model: PhotoModel, steer: Steer, box: tuple[float, flo
     spent, rounds, nodes = 0.0, 0, 0
     area = model.flat_info if allowed is None else model.flat_info * allowed
     total = float(area.sum())
+    reach = settings.horizon
     while settings.budget - spent >= 1.0:
         if float(np.sum(area * model.repeat ** root.counts.astype(float))) <= settings.enough * total:
             break  # what is left unrevealed is not worth the rest of the budget
-        horizon = min(settings.horizon, settings.budget - spent)
+        horizon = min(reach, settings.budget - spent)
         tree = _grow(root, model, steer, box, settings, horizon, rng, allowed)
         rounds += 1
         nodes += len(tree)
-        branch = _branch(tree, _best(tree, root, model, settings.step, allowed))
+        best, gained = _best(tree, root, model, settings.step, allowed)
+        if not gained and horizon < settings.budget - spent:
+            reach = 2.0 * horizon  # nothing to photograph within reach: look further before moving
+            continue
+        reach = settings.horizon
+        branch = _branch(tree, best)
         if not branch:
             break
         for node in branch:
@@ -204,27 +211,28 @@ def _extend(parent: Node, index: int, edge: Array, model: PhotoModel, s: RigSett
                 edge, np.asarray(shots, dtype=float).reshape(-1, 3))
 
 
-def _best(tree: list[Node], root: Node, model: PhotoModel, step: float, allowed: NDArray[np.bool_] | None) -> int:
-    """The node revealing the most information per metre (≥ `step` long, or the longest); else the one nearest
-    the most informative unrevealed cell; −1 when the root is the only node."""
+def _best(tree: list[Node], root: Node, model: PhotoModel, step: float,
+          allowed: NDArray[np.bool_] | None) -> tuple[int, bool]:
+    """The node revealing the most information per metre (≥ `step` long, or the longest), and True; else the
+    one nearest the most informative unrevealed cell, and False (−1 when that is the root or there is none)."""
     if len(tree) < 2:
-        return -1
+        return -1, False
     cost = np.array([n.cost for n in tree])
     rate = np.array([(n.info - root.info) / n.cost if n.cost > 0 else -1.0 for n in tree])
     eligible = cost >= min(step, float(cost.max())) - 1e-9
     rate = np.where(eligible, rate, -1.0)
     if rate.max() > 1e-9:
-        return int(np.argmax(rate))
+        return int(np.argmax(rate)), True
     left = model.flat_info * model.repeat ** root.counts.astype(float)
     if allowed is not None:
         left = left * allowed
     if left.max() <= 0:
-        return -1
+        return -1, False
     i, j = divmod(int(np.argmax(left)), model.shape[1])
     goal = np.array([model.field.north0 + i * model.field.cell, model.field.east0 + j * model.field.cell])
     d = np.array([math.hypot(n.pose[0] - goal[0], n.pose[1] - goal[1]) for n in tree])
     best = int(np.argmin(d))
-    return best if best != 0 else -1
+    return (best if best != 0 else -1), False
 
 
 def _branch(tree: list[Node], index: int) -> list[Node]:
