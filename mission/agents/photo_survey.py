@@ -4,7 +4,8 @@ For each target, the down-looking stereo camera photographs the object's area (i
 along `planners.rrt.informative_survey_path`: a receding-horizon RIG tree over the survey's information map
 (Î over the area floored at `COVERAGE_FLOOR`, so all of it is worth a photograph and its informative parts
 several), Dubins curves for the turning radius checked against the occupancy map seeded from the survey's height
-map. Its path budget is the length of the spacing-scaled lawnmower over the same area
+map, from the area's corner nearest the vehicle on the heading it arrives with, until at most `ENOUGH` of the
+area's information is unrevealed. Its path budget is the length of the spacing-scaled lawnmower over the same area
 (`planners.rrt.photo_survey_path`), capped by `BUDGET_SHARE` of the element's time budget at the survey speed;
 the lawnmower is flown instead when the RIG finds no clear way from its start. The camera
 flies `safe_distance + NAV_MARGIN_M` above the object's top (within the stereo range); photographs are triggered
@@ -47,6 +48,7 @@ SURVEY_SPEED = 0.5  # m/s over the object: slow enough for sharp photographs
 TRIGGER_M = 0.6
 BUDGET_SHARE = 0.7  # of the element's time budget flown surveying (the rest: approaches and climbing away)
 COVERAGE_FLOOR = 0.2  # Î over the object's area is at least this: all of it is worth a photograph
+ENOUGH = 0.05  # the plan ends once at most this share of the area's (floored) information is unrevealed
 MIN_RADIUS_M = 1.0  # the Dubins radius used when the vehicle declares no turning radius
 
 
@@ -69,16 +71,15 @@ def target_area(t: Target, margin: float) -> np.ndarray:
 
 
 def informative_plan(lawn: PhotoSurvey, area: np.ndarray, info: InformationField, grid: ClearanceGrid,
-                     budget: float, altitude: float, fov: tuple[float, float], radius: float, safe_distance: float,
-                     seed: int) -> PhotoSurvey | InformativeSurvey:
-    """The RIG plan over the area with the lawnmower's path length as its budget (capped by the element's time),
-    starting where the lawnmower starts; the lawnmower itself when the RIG finds no way (start not clear)."""
-    d = lawn.path[1, :2] - lawn.path[0, :2] if len(lawn.path) > 1 else np.array([1.0, 0.0])
+                     budget: float, start: np.ndarray, heading_deg: float, altitude: float, fov: tuple[float, float],
+                     radius: float, safe_distance: float, seed: int) -> PhotoSurvey | InformativeSurvey:
+    """The RIG plan over the area from `start` (the area's corner nearest the vehicle, entered on the heading it
+    arrives with), with the lawnmower's path length as its budget (capped by the element's time); the lawnmower
+    itself when the RIG finds no way (start not clear)."""
     plan = informative_survey_path(area, info, budget=budget, altitude=altitude, depth=float(lawn.path[0, 2]),
-                                   turning_radius=radius, start=lawn.path[0, :2],
-                                   start_heading_deg=math.degrees(math.atan2(d[1], d[0])), fov_deg=fov,
-                                   overlap=OVERLAP, gain=GAIN, coverage_floor=COVERAGE_FLOOR, clearance=grid,
-                                   safety_distance=safe_distance, seed=seed)
+                                   turning_radius=radius, start=start, start_heading_deg=heading_deg, fov_deg=fov,
+                                   overlap=OVERLAP, gain=GAIN, coverage_floor=COVERAGE_FLOOR, enough=ENOUGH,
+                                   clearance=grid, safety_distance=safe_distance, seed=seed)
     return plan if len(plan.path) > 1 else lawn
 
 
@@ -101,6 +102,7 @@ class PhotoSurveyRun:
         self.finished = False
         self.plans: list[tuple[Target, PhotoSurvey | InformativeSurvey, np.ndarray]] = []
         self.fields: list[InformationField] = []
+        here = np.array([context.nav.north, context.nav.east])
         for t in targets:
             area = target_area(t, MARGIN_M)
             products = survey_map_for(context.knowledge, t)
@@ -117,9 +119,12 @@ class PhotoSurveyRun:
                                      clearance=grid, safety_distance=p.safe_distance, seed=m.seed)
             budget = min(lawn.length, p.budget * SURVEY_SPEED * BUDGET_SHARE / len(targets))
             self.fields.append(info)
-            self.plans.append((t, informative_plan(lawn, area, info, grid, budget, self.altitude, self.fov,
-                                                   max(m.vehicle.turn_radius, MIN_RADIUS_M), p.safe_distance,
-                                                   m.seed), area))
+            start = area[int(np.argmin(np.hypot(area[:, 0] - here[0], area[:, 1] - here[1])))]
+            heading = math.degrees(math.atan2(start[1] - here[1], start[0] - here[0]))
+            plan = informative_plan(lawn, area, info, grid, budget, start, heading, self.altitude, self.fov,
+                                    max(m.vehicle.turn_radius, MIN_RADIUS_M), p.safe_distance, m.seed)
+            self.plans.append((t, plan, area))
+            here = plan.path[-1, :2]
         self.index = 0
         self.phase = "approach"
         self.speed = m.vehicle.cruise_speed

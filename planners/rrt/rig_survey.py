@@ -56,7 +56,8 @@ class InformativeSurvey:
 def informative_survey_path(area: ArrayLike, information: InformationField, *, budget: float, altitude: float,
                             depth: float, turning_radius: float, start: ArrayLike, start_heading_deg: float,
                             fov_deg: tuple[float, float] = (60.0, 45.0), overlap: float = 0.6, gain: float = 2.0,
-                            repeat: float = 0.5, coverage_floor: float = 0.0, clearance: ClearanceGrid | None = None,
+                            repeat: float = 0.5, coverage_floor: float = 0.0, enough: float = 0.2,
+                            clearance: ClearanceGrid | None = None,
                             safety_distance: float = 0.0, iterations: int = 100, horizon: float | None = None,
                             seed: int = 0) -> InformativeSurvey:
     """A path of at most `budget` metres from `start` (north, east) photographing the polygon `area`
@@ -65,7 +66,8 @@ def informative_survey_path(area: ArrayLike, information: InformationField, *, b
     `repeat` is ρ of `PhotoModel` (the share of a cell's information a further photograph still reveals);
     `horizon` is the receding horizon's length (default: 8 turning radii, at least 40 m). `coverage_floor`
     raises Î inside the area to at least that value, so that blank parts of it are worth a photograph too (a
-    survey that must cover the object) while informative parts stay worth several.
+    survey that must cover the object) while informative parts stay worth several. The plan ends early once at
+    most `enough` of the area's information is still unrevealed (`RigSettings.enough`).
     """
     poly = np.asarray(area, dtype=float).reshape(-1, 2)
     if len(poly) < 3:
@@ -92,7 +94,7 @@ def informative_survey_path(area: ArrayLike, information: InformationField, *, b
     settings = RigSettings(budget=float(budget), photo_spacing=along * (1.0 - overlap), gain=gain,
                            horizon=horizon if horizon is not None else max(40.0, 8.0 * turning_radius),
                            iterations=iterations, step=max(4.0, turning_radius),
-                           near_radius=max(6.0, 1.5 * turning_radius), seed=seed)
+                           near_radius=max(6.0, 1.5 * turning_radius), enough=enough, seed=seed)
     plan = plan_rig(pose, model, steer, (float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])), settings, allowed)
     path = np.column_stack([plan.samples[:, :2], np.full(len(plan.samples), depth)])
     photos = np.column_stack([plan.photos[:, :2], np.full(len(plan.photos), depth)])
