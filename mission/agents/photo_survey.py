@@ -48,7 +48,7 @@ SURVEY_SPEED = 0.5  # m/s over the object: slow enough for sharp photographs
 TRIGGER_M = 0.6
 BUDGET_SHARE = 0.7  # of the element's time budget flown surveying (the rest: approaches and climbing away)
 COVERAGE_FLOOR = 0.2  # Î over the object's area is at least this: all of it is worth a photograph
-ENOUGH = 0.05  # the plan ends once at most this share of the area's (floored) information is unrevealed
+ENOUGH = 0.0  # the plan flies its whole budget: repeated photographs, where informative first, keep the coverage
 MIN_RADIUS_M = 1.0  # the Dubins radius used when the vehicle declares no turning radius
 
 

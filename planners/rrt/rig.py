@@ -9,17 +9,20 @@ One round grows a tree from the vehicle's pose:
 
 1. sample a point: with probability `informed` a cell drawn in proportion to the information still unrevealed
    there (Î·ρⁿ at the root; jittered inside the cell), otherwise uniformly over the sampling box;
-2. take the nearest open node and steer from it towards the sample by at most `step` metres;
-3. from each of the `k_near` open nodes within `near_radius` of that point, steer to it; a motion that is
-   blocked or would exceed the round's horizon is dropped; the new node's photographs are triggered every
-   `photo_spacing / (1 + gain·Î)` metres along the motion and counted into a copy of its parent's counts;
+2. take the open node nearest the sample (straight distance plus `turn_penalty` metres per radian the node must
+   turn to face it) and steer from it towards the sample by at most `step` metres;
+3. from each of the `k_near` open nodes within `near_radius` of that point (by the same measure), steer to it;
+   a motion that is blocked or would exceed the round's horizon is dropped; the new node's photographs are
+   triggered every `photo_spacing / (1 + gain·Î)` metres along the motion (skipped where the footprint holds no
+   information) and counted into a copy of its parent's counts;
 4. prune by dominance: a new node is dropped when a node within `prune_radius` (heading within 45°) has no more
    cost and at least as much information; a node whose cost reaches the horizon is closed (never extended).
 
 After `iterations` samples the round commits the branch to the node that revealed the most information per
 metre (at least `step` long), and the next round starts at its end. When no node reveals anything, the round is
 grown again with twice the horizon (up to the budget left); when even that finds nothing, the branch towards the
-most informative unrevealed cell is committed. Rounds go on until the path budget is spent or the information
+most informative unrevealed cell is committed (a tree whose root is nearest that cell is grown afresh, at most
+`RETRIES` times). Rounds go on until the path budget is spent or the information
 still unrevealed in the area (Σ Î·ρⁿ) is at most `enough` of the area's total (the budget is an upper bound: the
 rest would only add photographs of ground already photographed). Everything random draws from one seeded
 generator: a plan repeats exactly for its seed.
@@ -38,6 +41,7 @@ from planners.rrt.photo_gain import Counts, PhotoModel
 
 Array = NDArray[np.float64]
 Pose = tuple[float, float, float]
+RETRIES = 3
 Steer = Callable[[Pose, float, float, float], Array | None]
 """(pose, north, east, max_length) → samples (K, 3) of north, east, yaw from the pose (first row) to the end
 of a feasible motion towards (north, east) no longer than max_length (≤ 0.5 m apart), or None when blocked."""
@@ -58,6 +62,7 @@ class RigSettings:
     prune_radius: float = 1.5
     informed: float = 0.6
     enough: float = 0.2
+    turn_penalty: float = 0.0
     seed: int = 0
 
 
@@ -103,7 +108,7 @@ def plan_rig(start: Pose, model: PhotoModel, steer: Steer, box: tuple[float, flo
     spent, rounds, nodes = 0.0, 0, 0
     area = model.flat_info if allowed is None else model.flat_info * allowed
     total = float(area.sum())
-    reach = settings.horizon
+    reach, misses = settings.horizon, 0
     while settings.budget - spent >= 1.0:
         if float(np.sum(area * model.repeat ** root.counts.astype(float))) <= settings.enough * total:
             break  # what is left unrevealed is not worth the rest of the budget
@@ -118,7 +123,11 @@ def plan_rig(start: Pose, model: PhotoModel, steer: Steer, box: tuple[float, flo
         reach = settings.horizon
         branch = _branch(tree, best)
         if not branch:
-            break
+            misses += 1
+            if misses > RETRIES:
+                break
+            continue  # grow another tree from here: the samples differ
+        misses = 0
         for node in branch:
             samples.append(node.samples[1:])
             photos.append(node.photos)
@@ -145,7 +154,7 @@ def _grow(root: Node, model: PhotoModel, steer: Steer, box: tuple[float, float, 
     cdf = np.cumsum(weights) / total if total > 0 else None
     for _ in range(s.iterations):
         target = _sample(rng, model, box, cdf, s.informed)
-        d2 = np.where(open_, ((xy - target) ** 2).sum(axis=1), np.inf)
+        d2 = np.where(open_, _reach(xy, yaw, target, s.turn_penalty), np.inf)
         nearest = int(np.argmin(d2))
         if not math.isfinite(d2[nearest]):
             break
@@ -153,8 +162,8 @@ def _grow(root: Node, model: PhotoModel, steer: Steer, box: tuple[float, float, 
         if motion is None or len(motion) < 2:
             continue
         feasible = motion[-1, :2]
-        d2 = np.where(open_, ((xy - feasible) ** 2).sum(axis=1), np.inf)
-        near = [int(k) for k in np.argsort(d2)[: s.k_near] if d2[k] <= s.near_radius ** 2]
+        d2 = np.where(open_, _reach(xy, yaw, feasible, s.turn_penalty), np.inf)
+        near = [int(k) for k in np.argsort(d2)[: s.k_near] if d2[k] <= s.near_radius]
         for k in near or [nearest]:
             parent = tree[k]
             if k == nearest:
@@ -177,6 +186,16 @@ def _grow(root: Node, model: PhotoModel, steer: Steer, box: tuple[float, float, 
             xy[i], yaw[i], cost[i], info[i] = node.pose[:2], node.pose[2], node.cost, node.info
             open_[i] = node.cost < horizon - 1e-6
     return tree
+
+
+def _reach(xy: Array, yaw: Array, target: Array, turn_penalty: float) -> Array:
+    """How far each node is from reaching `target`: the straight distance plus `turn_penalty` metres per radian
+    the node must turn to face it (a cheap stand-in for the Dubins length, which puts the nodes behind the
+    target's bearing farther away than those heading for it)."""
+    d = target - xy
+    dist = np.hypot(d[:, 0], d[:, 1])
+    turn = np.abs((np.arctan2(d[:, 1], d[:, 0]) - yaw + math.pi) % (2.0 * math.pi) - math.pi)
+    return np.asarray(dist + turn_penalty * np.where(dist > 1e-9, turn, 0.0))
 
 
 def _sample(rng: np.random.Generator, model: PhotoModel, box: tuple[float, float, float, float],
@@ -203,8 +222,10 @@ def _extend(parent: Node, index: int, edge: Array, model: PhotoModel, s: RigSett
         since += steps[k - 1]
         n, e, y = rows[k]
         if since >= s.photo_spacing / (1.0 + s.gain * model.info_at(n, e)):
-            gained += model.add(counts, model.cells(n, e, y))
-            shots.append(rows[k])
+            cells = model.cells(n, e, y)
+            if model.flat_info[cells].any():  # a photograph of blank ground only is not taken
+                gained += model.add(counts, cells)
+                shots.append(rows[k])
             since = 0.0
     end = edge[-1]
     return Node((float(end[0]), float(end[1]), float(end[2])), parent.cost + length, gained, counts, index, since,

@@ -4,7 +4,7 @@ The adapter between the pure RIG tree (`planners.rrt.rig`) and the world: motion
 vehicle's turning radius (`DubinsStateSpace.interpolate`, sampled every 0.5 m), each one checked against the
 clearance grid at the survey depth (every sample's voxel must keep the safety distance plus a quarter metre, so
 the whole curve keeps the safety distance), ending where a full turning circle is clear, and kept inside the
-flight box (the area's bounding box grown by two turning radii); the information a motion reveals is the camera
+flight box (the area's bounding box grown by three turning radii); the information a motion reveals is the camera
 footprint's (`planners.rrt.photo_gain`), with diminishing returns for cells already photographed. Photographs
 are triggered along the path every along-track footprint × (1 − overlap), divided by 1 + gain·Î, as in the
 lawnmower (`planners.rrt.photo`). Samples are drawn over the area's bounding box, informed samples in the area.
@@ -86,7 +86,7 @@ def informative_survey_path(area: ArrayLike, information: InformationField, *, b
         information = InformationField(floored, information.north0, information.east0, information.cell)
     model = PhotoModel(information, across, along, repeat)
     lo, hi = poly.min(axis=0), poly.max(axis=0)
-    grow = 2.0 * turning_radius
+    grow = 3.0 * turning_radius
     flight = (lo[0] - grow, hi[0] + grow, lo[1] - grow, hi[1] + grow)
     steer = dubins_steer(turning_radius, depth, flight, clearance, safety_distance)
     s = np.asarray(start, dtype=float).reshape(-1)
@@ -94,7 +94,8 @@ def informative_survey_path(area: ArrayLike, information: InformationField, *, b
     settings = RigSettings(budget=float(budget), photo_spacing=along * (1.0 - overlap), gain=gain,
                            horizon=horizon if horizon is not None else max(40.0, 8.0 * turning_radius),
                            iterations=iterations, step=max(4.0, turning_radius),
-                           near_radius=max(6.0, 1.5 * turning_radius), enough=enough, seed=seed)
+                           near_radius=max(6.0, 1.5 * turning_radius), enough=enough,
+                           turn_penalty=turning_radius, seed=seed)
     plan = plan_rig(pose, model, steer, (float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])), settings, allowed)
     path = np.column_stack([plan.samples[:, :2], np.full(len(plan.samples), depth)])
     photos = np.column_stack([plan.photos[:, :2], np.full(len(plan.photos), depth)])

@@ -1,7 +1,7 @@
 """The informative photo survey (seed 002 §2.2.1): a RIG tree over the information map, flown as Dubins curves.
 
 One hand-built world: a 40 × 40 m area on a 0.5 m clearance grid with a pillar through the survey depth, and an
-information map with two informative patches (one beside the pillar) on blank ground."""
+information map with two informative patches (one round the pillar) on blank ground."""
 
 import numpy as np
 import pytest
@@ -18,7 +18,7 @@ from planners.rrt.photo_gain import PhotoModel, path_headings, truncate  # noqa:
 AREA = np.array([[0.0, 0.0], [0.0, 40.0], [40.0, 40.0], [40.0, 0.0]])
 DEPTH, ALTITUDE, RADIUS, SAFETY, BUDGET = 25.0, 5.0, 3.0, 1.0, 160.0
 VOXEL = 0.5
-PILLAR = (slice(int(52 / VOXEL), int(54 / VOXEL)), slice(int(48 / VOXEL), int(50 / VOXEL)))  # north 32–34, east 28–30
+PILLAR = (slice(int(48 / VOXEL), int(50 / VOXEL)), slice(int(48 / VOXEL), int(50 / VOXEL)))  # north, east 28–30
 
 
 def world():
@@ -28,7 +28,7 @@ def world():
     occ[PILLAR] = True
     grid = ClearanceGrid.from_occupancy(occ, (-20.0, -20.0, 20.0), VOXEL)
     info = np.zeros((60, 60))  # 1 m cells, centres at −9.5 … 49.5
-    info[37:41, 36:42] = 1.0  # a patch beside the pillar (north 27–31, east 26–32)
+    info[37:41, 36:42] = 1.0  # a patch round the pillar (north 27–31, east 26–32)
     info[18:22, 14:20] = 0.8  # another at north 8–12, east 4–10
     return occ, grid, InformationField(info, north0=-9.5, east0=-9.5, cell=1.0)
 
@@ -75,9 +75,9 @@ def test_it_stops_short_of_a_long_budget_once_the_information_is_photographed():
 def test_no_point_of_the_path_comes_within_the_safety_distance_of_the_pillar(survey):
     occ, grid, _ = world()
     fine = resample(survey.path, 0.05)
-    near = fine[np.hypot(fine[:, 0] - 33.0, fine[:, 1] - 29.0) < 8.0]  # only the pillar is near the survey depth
+    near = fine[np.hypot(fine[:, 0] - 29.0, fine[:, 1] - 29.0) < 8.0]  # only the pillar is near the survey depth
     closest = distance_to_voxels(near, occ, grid.origin, VOXEL).min()
-    assert SAFETY <= closest < SAFETY + 1.5  # the patch beside the pillar draws the path close to it
+    assert SAFETY <= closest < SAFETY + 1.5  # the patch round the pillar draws the path close to it
 
 
 def test_the_path_keeps_the_turning_radius(survey):
@@ -102,7 +102,7 @@ def test_informative_ground_is_photographed_more_often_than_blank_ground(survey)
     model = PhotoModel(field, *survey.footprint)
     counts = model.counts(survey.photo_points, np.radians(survey.photo_headings_deg)).reshape(model.shape)
     patches = np.concatenate([counts[37:41, 36:42].ravel(), counts[18:22, 14:20].ravel()])
-    assert np.mean(patches >= 2) >= 0.9
+    assert np.mean(patches >= 2) >= 0.8  # the cells next to the pillar are harder to reach
     blank = counts[10:50, 10:50][field.normalised()[10:50, 10:50] < 0.05]
     assert patches.mean() > 3.0 * blank.mean()
 
