@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from mission.cli_onboard import add_onboard_commands
+from mission.cli_plan import add_plan_commands
 from mission.errors import AuvError, MissionError
 from mission.extras import has, require
 
@@ -21,9 +22,13 @@ def _validate(args: argparse.Namespace) -> int:
 
     status = 0
     for path in args.missions:
-        _, diags = validate_mission_file(path)
+        mission, diags = validate_mission_file(path)
         for d in diags:
             print(d)
+        if args.estimate and mission is not None:
+            from mission.cli_plan import print_estimate
+
+            print_estimate(mission, args.json)
         errors = sum(1 for d in diags if not d.warning)
         warnings = len(diags) - errors
         if errors:
@@ -229,6 +234,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("validate", help="check missions and report every problem as FILE:LINE:COL")
     p.add_argument("missions", nargs="+", help="mission YAML files")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing for valid missions")
+    p.add_argument("--estimate", action="store_true",
+                   help="also print each valid mission's distance, duration, energy and coverage estimate")
+    p.add_argument("--json", action="store_true", help="with --estimate, the estimate as JSON")
     p.set_defaults(func=_validate)
 
     p = sub.add_parser("schema", help="print the JSON Schema of the mission language")
@@ -296,6 +304,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--extend", help="extend this existing model with the run's views instead")
     p.set_defaults(func=_model_build)
     add_onboard_commands(sub)
+    add_plan_commands(sub)
     return parser
 
 

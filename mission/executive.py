@@ -23,11 +23,12 @@ from mission.agents import REGISTRY, Agent, AgentContext, AgentReport, Status
 from mission.agents.transit import TransitAgent
 from mission.artifacts import Artifacts
 from mission.errors import LinkLostError
+from mission.estimate import RouteEstimator
 from mission.knowledge import Knowledge
 from mission.language.models import Mission, RouteElement, Transit
 from mission.plugin_host import PluginHost
 from mission.safety import SafetyMonitors, Violation, abort_legs, policy_record
-from mission.strategy import inspection_run, order_objects
+from mission.strategy import Budget, plan_route
 from mission.vehicle import Command, NavState, Observation, VehicleInterface
 
 MARGIN_S = 120.0  # extra time every default timeout allows
@@ -42,6 +43,7 @@ class ElementStatus(enum.StrEnum):
     TIMEOUT = "timeout"
     ABORTED = "aborted"
     SKIPPED = "skipped"
+    DROPPED = "dropped"  # by the strategic level, before it began: the budget could not cover it
 
 
 @dataclass
@@ -271,30 +273,40 @@ class Executive:
             self._finish_safe(nav)
         self.report.end_time = nav.time
         self.report.completed = not abort_reason and not self.report.link_lost and all(
-            r.status is ElementStatus.SUCCEEDED for r in self.report.elements)
+            r.status in (ElementStatus.SUCCEEDED, ElementStatus.DROPPED) for r in self.report.elements)
         self.emit("mission_finished", nav.time, completed=self.report.completed, aborted=self.report.aborted,
                   reason=self.report.abort_reason)
         return self.report
 
     def _route(self) -> str:
-        """Run the route elements in order; the reason to abort, or "" when every element had its chance."""
+        """Run the route as the strategic level plans it (`mission.strategy.plan_route`: before the first element
+        and again after each, on what is left); the reason to abort, or "" when every element had its chance."""
         m = self.mission
         abort_reason = ""
-        route = list(m.route)
-        for index in range(len(route)):
+        remaining = list(m.route)
+        estimator = RouteEstimator(m)
+        expected: tuple[list[str], list[str]] = ([e.id for e in remaining], [])  # the plan, if nothing changes
+        dropped: list[tuple[RouteElement, str]] = []
+        while remaining:
             nav = self._last_nav
             assert nav is not None
-            end = inspection_run(route, index)
-            if not abort_reason and end - index >= 2 and (index == 0 or route[index - 1].inspect is None):
-                ordered = order_objects(m, route[index:end], nav.north, nav.east, m.seed)
-                if ordered != route[index:end]:
-                    route[index:end] = ordered
-                    self.emit("route_reordered", nav.time, elements=[e.id for e in route],
-                              reason="inspections in the shortest visiting order")
-            element = route[index]
             if abort_reason:
-                self.report.elements.append(ElementReport(element.id, element.kind, ElementStatus.SKIPPED))
-                continue
+                for element in remaining:
+                    self.report.elements.append(ElementReport(element.id, element.kind, ElementStatus.SKIPPED))
+                break
+            plan = plan_route(m, remaining, Budget(nav.north, nav.east, nav.depth, nav.time - self.report.start_time,
+                                                   nav.energy_wh), estimator)
+            shape = ([e.id for e in plan.order], [e.id for e, _ in plan.dropped])
+            if shape != expected:
+                self.emit("route_planned", nav.time, elements=shape[0],
+                          dropped=[{"element": e.id, "reason": why} for e, why in plan.dropped],
+                          estimated_duration_s=round(plan.duration_s, 1), estimated_energy_wh=round(plan.energy_wh, 1))
+            dropped = plan.dropped
+            if not plan.order:
+                break
+            expected = (shape[0][1:], shape[1])
+            element = plan.order[0]
+            remaining.remove(element)
             rep = self._element(element, nav)
             self.report.elements.append(rep)
             if self.report.link_lost:
@@ -305,6 +317,9 @@ class Executive:
                 abort_reason = "; ".join(v["message"] for v in self.report.violations[-3:])
             elif rep.status is not ElementStatus.SUCCEEDED and element.on_failure == "abort":
                 abort_reason = f"element '{element.id}' {rep.status}: {rep.reason}"
+        for element, why in dropped:
+            if not any(r.id == element.id for r in self.report.elements):
+                self.report.elements.append(ElementReport(element.id, element.kind, ElementStatus.DROPPED, reason=why))
         if abort_reason:
             self.report.abort_reason = abort_reason
         return abort_reason

@@ -266,6 +266,7 @@ class RouteElement(Strict):
     actions: list[Action] = []
     timeout: Duration | None = None
     on_failure: Literal["continue", "abort"] = "continue"
+    priority: Annotated[int, Field(ge=-100, le=100)] = 0  # when the budget falls short, the lowest is dropped first
 
     @model_validator(mode="after")
     def _exactly_one_kind(self) -> RouteElement:
@@ -284,6 +285,14 @@ class RouteElement(Strict):
         return getattr(self, self.kind)  # type: ignore[no-any-return]
 
 
+class Strategy(Strict):
+    """The strategic level (seed 002 §1, `mission.strategy`): the order of the work bound to known objects, and
+    the share of the time and energy budgets kept in hand when it decides what fits."""
+
+    order: Literal["auto", "as-listed"] = "auto"
+    budget_margin: Percent = 10.0
+
+
 class Mission(Strict):
     """A whole mission. The loader resolves `world` to an absolute path and records the source file."""
 
@@ -297,6 +306,7 @@ class Mission(Strict):
     sensors: Sensors = Sensors()
     plugins: Plugins = Plugins()
     safety: Safety = Safety()
+    strategy: Strategy = Strategy()
     objects: list[KnownObject] = []
     route: Annotated[list[RouteElement], Field(min_length=1)]
     _source: str | None = PrivateAttr(default=None)
