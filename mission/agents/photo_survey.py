@@ -10,7 +10,8 @@ area's information is unrevealed. Its path budget is the length of the spacing-s
 the lawnmower is flown instead when the RIG finds no clear way from its start. The camera
 flies `safe_distance + NAV_MARGIN_M` above the object's top (within the stereo range); photographs are triggered
 at the plan's photo points: the agent switches the camera on, takes the first pair that arrives with the
-*estimated* pose, and switches it off. `photo_coverage_percent` is the share of the object's area inside the
+*estimated* pose, and switches it off; a photo point the vehicle passes without coming near is given up once the
+path follower is `SKIP_LEGS` legs past it. `photo_coverage_percent` is the share of the object's area inside the
 union of the photographs' footprints, placed at their estimated poses. The pairs go into `Knowledge.maps` and
 `mission.sim.photos` writes them into the run folder (`photos/`) with their estimated and true poses; the
 information map of each target's plan goes into the element's maps (`photo_info_K`, `photo_info_grid_K`: north0,
@@ -50,6 +51,7 @@ BUDGET_SHARE = 0.7  # of the element's time budget flown surveying (the rest: ap
 COVERAGE_FLOOR = 0.2  # Î over the object's area is at least this: all of it is worth a photograph
 ENOUGH = 0.0  # the plan flies its whole budget: repeated photographs, where informative first, keep the coverage
 MIN_RADIUS_M = 1.0  # the Dubins radius used when the vehicle declares no turning radius
+SKIP_LEGS = 4  # a photo point whose path point lies this many legs behind the follower's is given up
 
 
 def footprint_polygon(north: float, east: float, heading_deg: float, across: float, along: float) -> Polygon:
@@ -68,6 +70,17 @@ def target_area(t: Target, margin: float) -> np.ndarray:
     a, b = t.length / 2 + margin, t.width / 2 + margin
     return np.array([np.array([t.north, t.east]) + s * a * u + r * b * v for s, r in ((1, 1), (1, -1), (-1, -1),
                                                                                       (-1, 1))])
+
+
+def photo_indices(path: np.ndarray, points: np.ndarray) -> list[int]:
+    """For each photo point in order, the index of the nearest path point at or after the previous one's (a path
+    that crosses itself keeps each photograph at its own pass)."""
+    out, j0 = [], 0
+    for p in points:
+        j = j0 + int(np.argmin(np.hypot(path[j0:, 0] - p[0], path[j0:, 1] - p[1]))) if j0 < len(path) else j0
+        out.append(j)
+        j0 = j
+    return out
 
 
 def informative_plan(lawn: PhotoSurvey, area: np.ndarray, info: InformationField, grid: ClearanceGrid,
@@ -137,6 +150,7 @@ class PhotoSurveyRun:
         _, plan, _ = self.plans[self.index]
         self.follower = PathFollower((north, east), plan.path[:, :2], lookahead=4.0, acceptance=1.0)
         self.next_photo = 0
+        self.photo_at = photo_indices(plan.path[:, :2], plan.photo_points[:, :2])
 
     def planned_path(self) -> list[tuple[float, float]]:
         return [(float(n), float(e)) for _, plan, _ in self.plans for n, e in plan.path[:, :2]]
@@ -160,6 +174,9 @@ class PhotoSurveyRun:
             self.payload = frozenset()
             self.next_photo += 1
         points = plan.photo_points
+        while not self.payload and self.next_photo < len(points) and \
+                self.photo_at[self.next_photo] < self.follower.leg - 1 - SKIP_LEGS:
+            self.next_photo += 1  # passed without coming near it: missed, the next one is due
         if not self.payload and self.next_photo < len(points):
             p = points[self.next_photo]
             ahead = (p[0] - nav.north) * math.cos(math.radians(nav.heading)) + \

@@ -14,7 +14,7 @@ One round grows a tree from the vehicle's pose:
 3. from each of the `k_near` open nodes within `near_radius` of that point (by the same measure), steer to it;
    a motion that is blocked or would exceed the round's horizon is dropped; the new node's photographs are
    triggered every `photo_spacing / (1 + gain·Î)` metres along the motion (skipped where the footprint holds no
-   information) and counted into a copy of its parent's counts;
+   information or, given `allowed`, misses the area) and counted into a copy of its parent's counts;
 4. prune by dominance: a new node is dropped when a node within `prune_radius` (heading within 45°) has no more
    cost and at least as much information; a node whose cost reaches the horizon is closed (never extended).
 
@@ -173,7 +173,7 @@ def _grow(root: Node, model: PhotoModel, steer: Steer, box: tuple[float, float, 
                 if found is None or len(found) < 2:
                     continue
                 edge = found
-            node = _extend(parent, k, edge, model, s, horizon)
+            node = _extend(parent, k, edge, model, s, horizon, allowed)
             if node is None:
                 continue
             dx, dy = xy[: len(tree), 0] - node.pose[0], xy[: len(tree), 1] - node.pose[1]
@@ -209,8 +209,10 @@ def _sample(rng: np.random.Generator, model: PhotoModel, box: tuple[float, float
     return np.array([rng.uniform(box[0], box[1]), rng.uniform(box[2], box[3])])
 
 
-def _extend(parent: Node, index: int, edge: Array, model: PhotoModel, s: RigSettings, horizon: float) -> Node | None:
-    """The node at the end of `edge` from `parent`, its photographs counted; None when past the horizon."""
+def _extend(parent: Node, index: int, edge: Array, model: PhotoModel, s: RigSettings, horizon: float,
+            allowed: NDArray[np.bool_] | None) -> Node | None:
+    """The node at the end of `edge` from `parent`, its photographs counted (only those whose footprint holds
+    information, or touches the `allowed` cells when given); None when past the horizon."""
     steps = np.hypot(np.diff(edge[:, 0]), np.diff(edge[:, 1])).tolist()
     length = float(sum(steps))
     if length < 1e-6 or parent.cost + length > horizon + 1e-6:
@@ -223,7 +225,7 @@ def _extend(parent: Node, index: int, edge: Array, model: PhotoModel, s: RigSett
         n, e, y = rows[k]
         if since >= s.photo_spacing / (1.0 + s.gain * model.info_at(n, e)):
             cells = model.cells(n, e, y)
-            if model.flat_info[cells].any():  # a photograph of blank ground only is not taken
+            if (model.flat_info[cells] > 0).any() if allowed is None else allowed[cells].any():
                 gained += model.add(counts, cells)
                 shots.append(rows[k])
             since = 0.0
