@@ -89,7 +89,7 @@ def compare_and_draw(products: dict[str, np.ndarray], element: dict[str, object]
     ring = np.vstack([area, area[:1]])
     ax.plot(ring[:, 1], ring[:, 0], color="white", lw=1.2, label="area photographed")
     ax.plot(lawn.path[:, 1], lawn.path[:, 0], "--", color="0.75", lw=1.0, label="spacing-scaled lawnmower")
-    ax.plot(path[:, 1], path[:, 0], color="tab:orange", lw=1.6, label="RIG path (flown)")
+    ax.plot(path[:, 1], path[:, 0], color="tab:orange", lw=1.6, label="RIG path (planned)")
     ax.scatter(points[:, 1], points[:, 0], s=12, marker="x", color="white", label="photo points")
     index = products.get("photo_index", np.zeros((0, 5)))
     if len(index):
