@@ -21,7 +21,12 @@ def mission_estimate(mission: Mission) -> tuple[MissionEstimate, list[tuple[str,
     from mission.estimate import RouteEstimator, estimate_mission
     from mission.strategy import Budget, plan_route
 
-    estimator = RouteEstimator(mission)
+    chart = None
+    if mission.world is not None:
+        from mission.world.chart import chart_of
+
+        chart = chart_of(mission.world)
+    estimator = RouteEstimator(mission, chart)
     home = mission.home
     plan = plan_route(mission, mission.route, Budget(home.north, home.east, home.depth), estimator)
     return estimate_mission(mission, plan.order, estimator), [(e.id, why) for e, why in plan.dropped]

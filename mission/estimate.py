@@ -14,14 +14,14 @@ The estimate walks the route from the home position, element by element, keeping
   field says which figures come from a plan and which from a budget.
 
 Energy is the vehicle model's (`mission.sim.vehicle`): hotel power all the time, propulsion power times the cube
-of speed over cruise speed while moving. The seabed and the current come from the mission's world (a chart of the
-site), when it names one.
+of speed over cruise speed while moving. The seabed and the current come from a `Chart` of the site when one is
+given (`auv plan` charts the mission's world).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -86,34 +86,39 @@ class _Where:
     depth: float
 
 
+@dataclass
+class Chart:
+    """What is known of the site before the dive: the seabed depth (`depth_at(north, east)`, metres) and the water
+    current (north, east, m/s). `auv plan` charts the mission's world (`mission.world.chart`); the executive has
+    none, and then altitudes keep the depth the vehicle has."""
+
+    depth_at: Callable[[float, float], float] | None = None
+    current: tuple[float, float] = (0.0, 0.0)
+
+
 class _Site:
-    """What a designer knows of the site: the seabed depth (charted, objects left out) and the current; and the
-    survey plans made so far (a plan depends on where the survey begins only through its first line)."""
+    """The chart, and the survey plans made so far (a plan depends on where the survey begins only through its
+    first line)."""
 
-    def __init__(self, mission: Mission):
+    def __init__(self, chart: Chart | None):
+        chart = chart or Chart()
         self.plans: dict[str, Any] = {}
-        self.seabed: Any = None
-        self.current = (0.0, 0.0)
-        if mission.world is not None:
-            from mission.language.loader import load_world
-            from mission.world.scene import build_scene
-
-            scene = build_scene(load_world(mission.world))
-            self.seabed, self.current = scene.seabed, scene.current
+        self.seabed_depth = chart.depth_at
+        self.current = chart.current
 
     def depth_at_altitude(self, north: float, east: float, altitude: float) -> float | None:
-        if self.seabed is None:
+        if self.seabed_depth is None:
             return None
-        return max(float(self.seabed.depth_at(north, east)) - altitude, 0.0)
+        return max(float(self.seabed_depth(north, east)) - altitude, 0.0)
 
 
 class RouteEstimator:
     """Estimates of route elements flown in a given order from a given position (the strategic level re-plans
     with it; `estimate_mission` gives the whole route's)."""
 
-    def __init__(self, mission: Mission):
+    def __init__(self, mission: Mission, chart: Chart | None = None):
         self.mission = mission
-        self.site = _Site(mission)
+        self.site = _Site(chart)
 
     def route(self, elements: Sequence[RouteElement], north: float, east: float,
               depth: float) -> list[ElementEstimate]:
@@ -128,11 +133,11 @@ class RouteEstimator:
 
 
 def estimate_mission(mission: Mission, route: Sequence[RouteElement] | None = None,
-                     estimator: RouteEstimator | None = None) -> MissionEstimate:
+                     estimator: RouteEstimator | None = None, chart: Chart | None = None) -> MissionEstimate:
     """The estimate of every element of `route` (default: the mission's, as listed) from the home position, and
     warnings against `max_duration` and the energy reserve."""
     home = mission.home
-    estimator = estimator or RouteEstimator(mission)
+    estimator = estimator or RouteEstimator(mission, chart)
     estimate = MissionEstimate(estimator.route(mission.route if route is None else route,
                                                home.north, home.east, home.depth))
     safety = mission.safety
@@ -292,4 +297,5 @@ def coverage_of(estimate: MissionEstimate) -> dict[str, float]:
     return {e.id: e.coverage_percent for e in estimate.elements if e.coverage_percent is not None}
 
 
-__all__ = ["ElementEstimate", "MissionEstimate", "RouteEstimator", "estimate_mission", "leg_time", "vertical_time"]
+__all__ = ["Chart", "ElementEstimate", "MissionEstimate", "RouteEstimator", "estimate_mission", "leg_time",
+           "vertical_time"]

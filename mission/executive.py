@@ -23,12 +23,11 @@ from mission.agents import REGISTRY, Agent, AgentContext, AgentReport, Status
 from mission.agents.transit import TransitAgent
 from mission.artifacts import Artifacts
 from mission.errors import LinkLostError
-from mission.estimate import RouteEstimator
 from mission.knowledge import Knowledge
 from mission.language.models import Mission, RouteElement, Transit
 from mission.plugin_host import PluginHost
 from mission.safety import SafetyMonitors, Violation, abort_legs, policy_record
-from mission.strategy import Budget, plan_route
+from mission.strategy import StrategicLevel
 from mission.vehicle import Command, NavState, Observation, VehicleInterface
 
 MARGIN_S = 120.0  # extra time every default timeout allows
@@ -279,35 +278,12 @@ class Executive:
         return self.report
 
     def _route(self) -> str:
-        """Run the route as the strategic level plans it (`mission.strategy.plan_route`: before the first element
-        and again after each, on what is left); the reason to abort, or "" when every element had its chance."""
-        m = self.mission
+        """Run the route as the strategic level plans it (`mission.strategy`: before the first element and again
+        after each, on what is left); the reason to abort, or "" when every element had its chance."""
         abort_reason = ""
-        remaining = list(m.route)
-        estimator = RouteEstimator(m)
-        expected: tuple[list[str], list[str]] = ([e.id for e in remaining], [])  # the plan, if nothing changes
-        dropped: list[tuple[RouteElement, str]] = []
-        while remaining:
-            nav = self._last_nav
-            assert nav is not None
-            if abort_reason:
-                for element in remaining:
-                    self.report.elements.append(ElementReport(element.id, element.kind, ElementStatus.SKIPPED))
-                break
-            plan = plan_route(m, remaining, Budget(nav.north, nav.east, nav.depth, nav.time - self.report.start_time,
-                                                   nav.energy_wh), estimator)
-            shape = ([e.id for e in plan.order], [e.id for e, _ in plan.dropped])
-            if shape != expected:
-                self.emit("route_planned", nav.time, elements=shape[0],
-                          dropped=[{"element": e.id, "reason": why} for e, why in plan.dropped],
-                          estimated_duration_s=round(plan.duration_s, 1), estimated_energy_wh=round(plan.energy_wh, 1))
-            dropped = plan.dropped
-            if not plan.order:
-                break
-            expected = (shape[0][1:], shape[1])
-            element = plan.order[0]
-            remaining.remove(element)
-            rep = self._element(element, nav)
+        strategy = StrategicLevel(self.mission, self.emit, self.report.start_time)
+        while not abort_reason and self._last_nav is not None and (element := strategy.next(self._last_nav)):
+            rep = self._element(element, self._last_nav)
             self.report.elements.append(rep)
             if self.report.link_lost:
                 abort_reason = f"link lost during '{element.id}'"
@@ -317,9 +293,10 @@ class Executive:
                 abort_reason = "; ".join(v["message"] for v in self.report.violations[-3:])
             elif rep.status is not ElementStatus.SUCCEEDED and element.on_failure == "abort":
                 abort_reason = f"element '{element.id}' {rep.status}: {rep.reason}"
-        for element, why in dropped:
-            if not any(r.id == element.id for r in self.report.elements):
-                self.report.elements.append(ElementReport(element.id, element.kind, ElementStatus.DROPPED, reason=why))
+        for element in strategy.skip_rest():
+            status, why = next(((ElementStatus.DROPPED, why) for e, why in strategy.dropped if e is element),
+                               (ElementStatus.SKIPPED, ""))
+            self.report.elements.append(ElementReport(element.id, element.kind, status, reason=why))
         if abort_reason:
             self.report.abort_reason = abort_reason
         return abort_reason

@@ -24,11 +24,13 @@ return leg) on 4, 8, 12 and 20 objects, the exact ordering's paths were 10–18 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 from mission.estimate import ElementEstimate, RouteEstimator
 from mission.language.models import Mission, RouteElement
+from mission.vehicle import NavState
 
 
 @dataclass(frozen=True)
@@ -159,4 +161,40 @@ def _dependents(elements: Sequence[RouteElement], victim: RouteElement) -> list[
     return out
 
 
-__all__ = ["Budget", "RoutePlan", "bound_object", "order_route", "plan_route"]
+class StrategicLevel:
+    """The executive's strategic level: `next(nav)` re-plans what is left of the route and gives the element to
+    fly now (None when nothing is left to fly); a plan that changes from what was expected is a `route_planned`
+    event. `dropped` is the work the last plan left out."""
+
+    def __init__(self, mission: Mission, emit: Callable[..., Any], start_time: float):
+        self.mission, self.emit, self.start_time = mission, emit, start_time
+        self.remaining = list(mission.route)
+        self.estimator = RouteEstimator(mission)
+        self.expected: tuple[list[str], list[str]] = ([e.id for e in self.remaining], [])
+        self.dropped: list[tuple[RouteElement, str]] = []
+
+    def next(self, nav: NavState) -> RouteElement | None:
+        if not self.remaining:
+            return None
+        plan = plan_route(self.mission, self.remaining, Budget(nav.north, nav.east, nav.depth,
+                                                              nav.time - self.start_time, nav.energy_wh),
+                          self.estimator)
+        shape = ([e.id for e in plan.order], [e.id for e, _ in plan.dropped])
+        if shape != self.expected:
+            self.emit("route_planned", nav.time, elements=shape[0],
+                      dropped=[{"element": e.id, "reason": why} for e, why in plan.dropped],
+                      estimated_duration_s=round(plan.duration_s, 1), estimated_energy_wh=round(plan.energy_wh, 1))
+        self.dropped = plan.dropped
+        if not plan.order:
+            return None
+        self.expected = (shape[0][1:], shape[1])
+        self.remaining.remove(plan.order[0])
+        return plan.order[0]
+
+    def skip_rest(self) -> list[RouteElement]:
+        """What is left, now that the mission is aborting (in the route's order); nothing is left to plan."""
+        rest, self.remaining = self.remaining, []
+        return rest
+
+
+__all__ = ["Budget", "StrategicLevel", "RoutePlan", "bound_object", "order_route", "plan_route"]

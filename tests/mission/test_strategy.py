@@ -9,10 +9,10 @@ import pytest
 import yaml
 from conftest import MISSIONS
 
+from mission.estimate import RouteEstimator
 from mission.executive import ElementStatus, Executive
 from mission.language.models import Mission
 from mission.strategy import Budget, bound_object, order_route, plan_route
-from mission.estimate import RouteEstimator
 from mission.testing import FakeAgent, StubVehicle
 
 POSES = {"a": (100.0, 0.0), "b": (10.0, 5.0), "c": (55.0, -40.0), "d": (60.0, 30.0), "e": (20.0, 60.0)}
