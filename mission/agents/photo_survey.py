@@ -49,7 +49,7 @@ SURVEY_SPEED = 0.5  # m/s over the object: slow enough for sharp photographs
 TRIGGER_M = 0.6
 BUDGET_SHARE = 0.7  # of the element's time budget flown surveying (the rest: approaches and climbing away)
 COVERAGE_FLOOR = 0.2  # Î over the object's area is at least this: all of it is worth a photograph
-ENOUGH = 0.0  # the plan flies its whole budget: repeated photographs, where informative first, keep the coverage
+ENOUGH = 0.02  # ends when 98 % is revealed: repeated photographs, informative ground first, keep the coverage
 MIN_RADIUS_M = 1.0  # the Dubins radius used when the vehicle declares no turning radius
 SKIP_LEGS = 4  # a photo point whose path point lies this many legs behind the follower's is given up
 
