@@ -89,10 +89,13 @@ def informative_plan(lawn: PhotoSurvey, area: np.ndarray, info: InformationField
     """The RIG plan over the area from `start` (the area's corner nearest the vehicle, entered on the heading it
     arrives with), with the lawnmower's path length as its budget (capped by the element's time); the lawnmower
     itself when the RIG finds no way (start not clear)."""
-    plan = informative_survey_path(area, info, budget=budget, altitude=altitude, depth=float(lawn.path[0, 2]),
-                                   turning_radius=radius, start=start, start_heading_deg=heading_deg, fov_deg=fov,
-                                   overlap=OVERLAP, gain=GAIN, coverage_floor=COVERAGE_FLOOR, enough=ENOUGH,
-                                   clearance=grid, safety_distance=safe_distance, seed=seed)
+    try:
+        plan = informative_survey_path(area, info, budget=budget, altitude=altitude, depth=float(lawn.path[0, 2]),
+                                       turning_radius=radius, start=start, start_heading_deg=heading_deg,
+                                       fov_deg=fov, overlap=OVERLAP, gain=GAIN, coverage_floor=COVERAGE_FLOOR,
+                                       enough=ENOUGH, clearance=grid, safety_distance=safe_distance, seed=seed)
+    except ValueError:  # the start is not clear
+        return lawn
     return plan if len(plan.path) > 1 else lawn
 
 

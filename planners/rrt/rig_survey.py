@@ -67,7 +67,8 @@ def informative_survey_path(area: ArrayLike, information: InformationField, *, b
     `horizon` is the receding horizon's length (default: 8 turning radii, at least 40 m). `coverage_floor`
     raises Î inside the area to at least that value, so that blank parts of it are worth a photograph too (a
     survey that must cover the object) while informative parts stay worth several. The plan ends early once at
-    most `enough` of the area's information is still unrevealed (`RigSettings.enough`).
+    most `enough` of the area's information is still unrevealed (`RigSettings.enough`). A start within the
+    safety distance of an obstacle is refused (ValueError).
     """
     poly = np.asarray(area, dtype=float).reshape(-1, 2)
     if len(poly) < 3:
@@ -90,6 +91,8 @@ def informative_survey_path(area: ArrayLike, information: InformationField, *, b
     flight = (lo[0] - grow, hi[0] + grow, lo[1] - grow, hi[1] + grow)
     steer = dubins_steer(turning_radius, depth, flight, clearance, safety_distance)
     s = np.asarray(start, dtype=float).reshape(-1)
+    if clearance is not None and not clearance.safe([[s[0], s[1], depth]], safety_distance)[0]:
+        raise ValueError(f"the survey's start {s.round(2).tolist()} is within {safety_distance} m of an obstacle")
     pose: Pose = (float(s[0]), float(s[1]), math.radians(start_heading_deg))
     settings = RigSettings(budget=float(budget), photo_spacing=along * (1.0 - overlap), gain=gain,
                            horizon=horizon if horizon is not None else max(40.0, 8.0 * turning_radius),

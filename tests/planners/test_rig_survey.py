@@ -111,3 +111,10 @@ def test_a_plan_repeats_exactly_for_its_seed(survey):
     again = plan()
     np.testing.assert_array_equal(again.path, survey.path)
     np.testing.assert_array_equal(again.photo_points, survey.photo_points)
+
+
+def test_a_start_inside_the_safety_margin_is_refused():
+    _, grid, field = world()
+    with pytest.raises(ValueError, match="within"):
+        informative_survey_path(AREA, field, budget=50.0, altitude=ALTITUDE, depth=DEPTH, turning_radius=RADIUS,
+                                start=(29.0, 29.0), start_heading_deg=0.0, clearance=grid, safety_distance=SAFETY)
