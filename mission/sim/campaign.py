@@ -148,19 +148,23 @@ def _result(future: Future[dict[str, Any]], seed: int, out_dir: Path) -> dict[st
 
 def run_campaign(mission_path: str | Path, seeds: Sequence[int], out: str | Path, jobs: int = 1,
                  plots: bool = False, on_run: Callable[[dict[str, Any]], None] | None = None,
-                 plugin_latency_s: float | None = SIMULATED_LATENCY_S, force: bool = False) -> dict[str, Any]:
+                 plugin_latency_s: float | None = SIMULATED_LATENCY_S, dask: str | None = None,
+                 force: bool = False) -> dict[str, Any]:
     """Run `mission_path` once per seed (`jobs` processes at a time) into `out/seed-N/`; returns and writes
-    `out/campaign.json` (rewritten after every run). `out` is claimed and locked for the campaign as a run folder
-    is (`mission.runlock`; `force` replaces an earlier campaign's folder)."""
+    `out/campaign.json` (rewritten after every run). With `dask` the runs are Dask tasks
+    (`mission.sim.dask_campaign`): "" starts a local cluster of `jobs` workers, an address uses that scheduler.
+    `out` is claimed and locked for the campaign as a run folder is (`mission.runlock`; `force` replaces an earlier
+    campaign's folder)."""
     from mission.runlock import claim_run_folder
 
     out_dir = Path(out)
     with claim_run_folder(out_dir, "auv simulate --seeds", [("mission", Path(mission_path))], force):
-        return _campaign(mission_path, seeds, out_dir, jobs, plots, on_run, plugin_latency_s)
+        return _campaign(mission_path, seeds, out_dir, jobs, plots, on_run, plugin_latency_s, dask)
 
 
 def _campaign(mission_path: str | Path, seeds: Sequence[int], out_dir: Path, jobs: int, plots: bool,
-              on_run: Callable[[dict[str, Any]], None] | None, plugin_latency_s: float | None) -> dict[str, Any]:
+              on_run: Callable[[dict[str, Any]], None] | None, plugin_latency_s: float | None,
+              dask: str | None) -> dict[str, Any]:
     rows: list[dict[str, Any]] = []
     report_path = out_dir / "campaign.json"
 
@@ -173,7 +177,11 @@ def _campaign(mission_path: str | Path, seeds: Sequence[int], out_dir: Path, job
             on_run(row)
 
     jobs = max(1, min(jobs, len(seeds)))
-    if jobs == 1:
+    if dask is not None:
+        from mission.sim.dask_campaign import dask_rows
+
+        dask_rows(_run_one, str(mission_path), seeds, out_dir, plots, plugin_latency_s, record, dask or None, jobs)
+    elif jobs == 1:
         for seed in seeds:
             record(_run_one(str(mission_path), seed, str(out_dir / f"seed-{seed}"), plots, plugin_latency_s))
     else:
