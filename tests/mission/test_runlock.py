@@ -12,7 +12,7 @@ from mission.cli import main
 from mission.errors import RunFolderError
 from mission.runlock import MARKER, claim_run_folder, is_run_folder
 
-TRANSIT = MISSIONS / "duration_abort.yaml"  # a few hundred simulated seconds: well under a second of CPU
+TRANSIT = MISSIONS / "fault_battery.yaml"  # aborts after ~440 simulated seconds: about a second of CPU
 
 
 def refusal(capsys: pytest.CaptureFixture[str], *argv: str) -> str:
@@ -39,7 +39,7 @@ def test_the_missions_own_folder_and_its_ancestors_are_refused(tmp_path, capsys)
         assert main(["simulate", str(mission), "-q", "--no-plots", "--out", str(out), "--force"]) == 1
         err = capsys.readouterr().err.strip()
         assert err.endswith("a run folder must be a folder of its own") and "holds the mission" in err
-    assert mission.read_text().startswith("# A route longer")  # untouched
+    assert mission.read_text().startswith("# A battery fault")  # untouched
 
 
 def test_a_folder_holding_the_world_is_refused():
