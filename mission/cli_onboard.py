@@ -23,7 +23,8 @@ def _run(args: argparse.Namespace) -> int:
         print(d, file=sys.stderr)
     out = Path(args.out) if args.out else Path("runs") / f"{mission.name}-onboard"
     print(f"{mission.name}: connecting to {args.vehicle} (up to {args.connect_timeout:g} s)", file=sys.stderr)
-    result = run_onboard(mission, args.vehicle, out, connect_timeout=args.connect_timeout)
+    drivers = sensor_driver_options(mission, args.sensor_driver or [])
+    result = run_onboard(mission, args.vehicle, out, connect_timeout=args.connect_timeout, sensor_drivers=drivers)
     m = result.metrics
     state = "completed" if m["completed"] else ("LINK LOST" if m["link_lost"] else
                                                 "STOPPED" if m["stopped"] else
@@ -36,6 +37,20 @@ def _run(args: argparse.Namespace) -> int:
         print(f"  {e['id']:<24} {e['kind']:<9} {e['status']:<10} {e['duration_s']:8.1f} s{extra}")
     print(f"run folder: {out}")
     return 0 if m["completed"] else 1
+
+
+def sensor_driver_options(mission: Any, options: list[str]) -> dict[str, str]:
+    """`--sensor-driver` values → sensor name → driver URI (a bare URI applies to every sensor the mission has)."""
+    from mission.sensors import SENSOR_NAMES
+
+    drivers: dict[str, str] = {}
+    for option in options:
+        name, sep, uri = option.partition("=")
+        if sep and name in SENSOR_NAMES:
+            drivers[name] = uri
+        else:
+            drivers.update({n: option for n in SENSOR_NAMES if getattr(mission.sensors, n) is not None})
+    return drivers
 
 
 def _vehicles(args: argparse.Namespace) -> int:
@@ -85,8 +100,10 @@ def _sim_serve(args: argparse.Namespace) -> int:
         fields = " ".join(f"{k}={v}" for k, v in event.items() if k not in ("time", "event"))
         print(f"  t={event['time']:9.1f} s  {event['event']} {fields}", flush=True)
 
+    if args.zenoh:
+        print(f"payload streams on Zenoh {', '.join(args.zenoh)} under {args.zenoh_prefix}/", flush=True)
     summary = serve(mission, args.mavlink, seed=seed, speedup=args.speedup, out=args.out, stop_event=stop,
-                    on_event=None if args.quiet else show)
+                    on_event=None if args.quiet else show, zenoh=args.zenoh or (), zenoh_prefix=args.zenoh_prefix)
     print(f"stopped: {summary.sim_time:.1f} s of vehicle time in {summary.wall_time:.1f} s "
           f"({summary.steps} steps)", flush=True)
     return 0
@@ -103,6 +120,9 @@ def _add_sim_parser(sub: Any) -> None:
     p.add_argument("--seed", type=int, help="random seed (default: the mission's)")
     p.add_argument("--out", help="write the truth here as it goes (mission.yaml, world.yaml, trajectory.csv, "
                    "usbl.csv, autopilot.jsonl)")
+    p.add_argument("--zenoh", action="append", metavar="ENDPOINT",
+                   help="also publish the payload streams on Zenoh, listening here, e.g. tcp/127.0.0.1:7447")
+    p.add_argument("--zenoh-prefix", default="auv/sim", metavar="KEY", help="key prefix (default auv/sim)")
     p.add_argument("-q", "--quiet", action="store_true", help="do not print the autopilot's events")
     p.set_defaults(func=_sim_serve)
 # -- end of `auv sim serve` ------------------------------------------------------------------------------------
@@ -117,6 +137,9 @@ def add_onboard_commands(sub: Any) -> None:
     p.add_argument("--out", help="run folder (default: runs/MISSION_NAME-onboard)")
     p.add_argument("--connect-timeout", type=float, default=10.0, metavar="S",
                    help="seconds to wait for the vehicle (default 10)")
+    p.add_argument("--sensor-driver", action="append", metavar="[SENSOR=]URI",
+                   help="payload stream driver for SENSOR (mbes, stereo, scanner), or for every sensor the mission "
+                   "has, overriding the mission's `driver:`; e.g. zenoh:auv/sim?connect=tcp/127.0.0.1:7447")
     p.set_defaults(func=_run)
 
     p = sub.add_parser("vehicles", help="list installed vehicle adapters (entry-point group auv.vehicles)")

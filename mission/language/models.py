@@ -68,7 +68,16 @@ class VehicleSettings(Strict):
 Vehicle = VehicleSettings  # the same model under its short name (`Mission.vehicle`)
 
 
-class Mbes(Strict):
+class Streamed(Strict):
+    """A payload sensor's stream onboard: `driver` is an `auv.sensors` URI (`zenoh:auv/sim`, `replay:DIR`,
+    `camera:0,1?calibration=FILE`; `auv run` only, the simulator ignores it); a stream silent for `timeout` while
+    the sensor is on is lost."""
+
+    driver: str | None = None
+    timeout: Duration = 2.0
+
+
+class Mbes(Streamed):
     beams: Annotated[int, Field(ge=2)] = 256
     swath_deg: Annotated[float, Field(gt=0, lt=180)] = 120.0
     max_range: Positive = 80.0
@@ -76,7 +85,7 @@ class Mbes(Strict):
     range_sigma: NonNegative = 0.05
 
 
-class Stereo(Strict):
+class Stereo(Streamed):
     width: Annotated[int, Field(ge=16)] = 1200
     height: Annotated[int, Field(ge=16)] = 900
     fx: Positive = 1000.0
@@ -85,7 +94,7 @@ class Stereo(Strict):
     max_range: Positive = 8.0
 
 
-class Scanner(Strict):
+class Scanner(Streamed):
     fov_deg: tuple[Annotated[float, Field(gt=0, lt=180)], Annotated[float, Field(gt=0, lt=180)]] = (60.0, 45.0)
     max_range: Positive = 12.0
     rate_hz: Positive = 2.0

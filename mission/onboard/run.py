@@ -19,15 +19,18 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
+from mission.agents import REGISTRY
 from mission.artifacts import Artifacts
 from mission.errors import UnsupportedMissionError
 from mission.events import EventLog
 from mission.executive import ExecutionReport, Executive, unsupported_elements
 from mission.language.models import Mission
 from mission.onboard.report import onboard_metrics
+from mission.onboard.streamed import StreamedVehicle, guarded_agents
 from mission.plugin_host import PluginHost
 from mission.plugin_settings import plugin_settings
 from mission.runfolder import TrajectoryWriter, prepare_run_folder, write_metrics
+from mission.sensors.streams import open_streams
 from mission.vehicle import Command, Observation
 from mission.vehicles import OnboardVehicle, VehicleOptions, open_vehicle
 
@@ -90,6 +93,17 @@ class RecordingVehicle:
         return max(0.0, self.energy_start_wh - self.energy_wh)
 
 
+def attach_streams(vehicle: OnboardVehicle, mission: Mission, sensor_drivers: dict[str, str] | None,
+                   emit: Any) -> OnboardVehicle:
+    """The vehicle with the mission's payload streams attached (itself when no sensor has a driver)."""
+    streams = open_streams(mission, sensor_drivers)
+    if not streams:
+        return vehicle
+    for name, stream in streams.items():
+        emit("sensor_stream", 0.0, sensor=name, driver=stream.uri, timeout_s=stream.timeout)
+    return StreamedVehicle(vehicle, streams, emit)
+
+
 @contextmanager
 def stop_on_signals(executive: Executive) -> Iterator[None]:
     """SIGINT/SIGTERM ask the executive to stop cleanly; a second SIGINT interrupts at once."""
@@ -109,8 +123,13 @@ def stop_on_signals(executive: Executive) -> Iterator[None]:
 
 
 def run_onboard(mission: Mission, uri: str, out: str | Path, connect_timeout: float = 10.0,
-                seed: int | None = None, signals: bool = True) -> OnboardResult:
+                seed: int | None = None, signals: bool = True,
+                sensor_drivers: dict[str, str] | None = None) -> OnboardResult:
     """Fly `mission` on the vehicle at `uri` and write the run folder `out` (see the module docstring).
+
+    Mission sensors with a `driver:` (or an entry in `sensor_drivers`, sensor name → driver URI) get their payload
+    stream (`mission.onboard.streamed`); what each stream delivered, dropped and lost goes to metrics.json under
+    `sensors`.
 
     Raises `VehicleError` when the vehicle cannot be opened (the run folder then holds the mission and an
     event saying why)."""
@@ -138,11 +157,18 @@ def run_onboard(mission: Mission, uri: str, out: str | Path, connect_timeout: fl
         except Exception as exc:
             log.emit("vehicle_unavailable", 0.0, vehicle=uri, reason=str(exc))
             raise
+        try:
+            vehicle = attach_streams(vehicle, mission, sensor_drivers, emit)
+        except BaseException as exc:
+            vehicle.close()
+            log.emit("sensor_unavailable", 0.0, reason=str(exc))
+            raise
         recording = RecordingVehicle(vehicle, writer)
         try:
             roles = mission.plugins.model_dump()
             host = PluginHost(roles, plugin_settings(mission), emit) if any(roles.values()) else None
-            executive = Executive(mission, recording, emit, plugins=host, artifacts=Artifacts(out))
+            agents = guarded_agents(REGISTRY, vehicle.lost) if isinstance(vehicle, StreamedVehicle) else None
+            executive = Executive(mission, recording, emit, agents=agents, plugins=host, artifacts=Artifacts(out))
             if signals:
                 with stop_on_signals(executive):
                     report = executive.run()
@@ -155,6 +181,8 @@ def run_onboard(mission: Mission, uri: str, out: str | Path, connect_timeout: fl
         wall = time.perf_counter() - wall0
         metrics = onboard_metrics(mission.name, seed, report, wall, recording.distance_m,
                                   recording.energy_used_wh, mission.vehicle.energy_wh)
+        if isinstance(vehicle, StreamedVehicle):
+            metrics["sensors"] = vehicle.stream_metrics()
         write_metrics(out, metrics)
     finally:
         writer.close()
