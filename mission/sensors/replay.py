@@ -79,7 +79,7 @@ class ReplayDriver:
         right = cv2.imread(str(self.right[i]), cv2.IMREAD_GRAYSCALE)
         if left is None or right is None:
             raise SensorError(f"{self.folder}: cannot read the images of frame {i}")
-        return left, right
+        return np.asarray(left, dtype=np.uint8), np.asarray(right, dtype=np.uint8)
 
     def _play(self) -> None:
         n, t0 = len(self.times), float(self.times[0])
