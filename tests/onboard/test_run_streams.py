@@ -10,6 +10,7 @@ import socket
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -90,7 +91,7 @@ def fly(mission: Path, tmp_path: Path, publish: bool, timeout: float = 120.0) ->
     return runner.returncode, runner.stdout + runner.stderr, out
 
 
-def events(folder: Path) -> list[dict]:
+def events(folder: Path) -> list[dict[str, Any]]:
     return [json.loads(line) for line in (folder / "events.jsonl").read_text().splitlines()]
 
 
