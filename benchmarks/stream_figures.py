@@ -1,0 +1,162 @@
+"""Payload-stream figures for the README.
+
+    python benchmarks/stream_figures.py latency [--seconds 20] [--rate 10] [--size 1200x900]
+    python benchmarks/stream_figures.py speedup MISSION [--speedup 5]
+
+`latency`: a publisher PROCESS sends stereo pairs (two sensor_msgs/Image mono8 + two CameraInfo, CDR) on Zenoh
+over TCP loopback at the given rate, stamped with the host's clock; this process receives them with the `zenoh`
+sensor driver into an onboard `SensorStream` drained by a 5 Hz control loop, and prints the pairs per second
+delivered, the latency from the sensor stamp to the driver (transport and decoding) and to the agent (at the next
+control tick), and the frames dropped.
+
+`speedup`: flies MISSION with `auv run` (zenoh driver) against `auv sim serve --zenoh --speedup K` and prints each
+stream's received / delivered / dropped frames from the run's metrics.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def free_port(kind: int = socket.SOCK_STREAM) -> int:
+    with socket.socket(socket.AF_INET, kind) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def publish(port: int, seconds: float, rate: float, width: int, height: int) -> None:
+    """The publisher process: stereo pairs at `rate` Hz for `seconds`, stamped with time.time()."""
+    from mission.sensors import ros_msgs as ros
+    from mission.sensors.zenoh_keys import open_session
+
+    session = open_session(listen=[f"tcp/127.0.0.1:{port}"])
+    pubs = {k: session.declare_publisher(f"auv/bench/stereo/{k}") for k in (
+        "left/image_raw", "right/image_raw", "left/camera_info", "right/camera_info")}
+    rng = np.random.default_rng(0)
+    left = rng.integers(0, 255, (height, width), dtype=np.uint8)
+    right = np.roll(left, -20, axis=1)
+    K = np.array([[1000.0, 0, width / 2], [0, 1000.0, height / 2], [0, 0, 1]])
+    time.sleep(1.0)  # the subscriber connects
+    start = time.monotonic()
+    k = 0
+    while time.monotonic() - start < seconds:
+        due = start + k / rate
+        time.sleep(max(due - time.monotonic(), 0.0))
+        t = time.time()
+        for side, image in (("left", left), ("right", right)):
+            pubs[f"{side}/camera_info"].put(ros.encode(ros.camera_info_msg(t, K, width, height, 0.25,
+                                                                           f"stereo_{side}", side == "right")))
+            pubs[f"{side}/image_raw"].put(ros.encode(ros.image_msg(t, image, f"stereo_{side}")))
+        k += 1
+    time.sleep(0.5)
+    session.close()
+
+
+def latency(args: argparse.Namespace) -> None:
+    from mission.language.models import Stereo
+    from mission.sensors import DriverContext, open_driver
+    from mission.sensors.navtrack import NavTrack
+    from mission.sensors.streams import SensorStream
+    from mission.vehicle import NavState
+
+    width, height = (int(v) for v in args.size.split("x"))
+    port = free_port()
+    child = subprocess.Popen([sys.executable, __file__, "_publish", str(port), str(args.seconds), str(args.rate),
+                              str(width), str(height)], cwd=ROOT)
+    transport: list[float] = []
+
+    def opener(uri: str, context: DriverContext):  # type: ignore[no-untyped-def]
+        def sink(frame):  # type: ignore[no-untyped-def]
+            transport.append(time.time() - frame.time)
+            context.sink(frame)
+
+        return open_driver(uri, DriverContext(context.sensor, context.settings, sink))
+
+    stream = SensorStream("stereo", f"zenoh:auv/bench?connect=tcp/127.0.0.1:{port}", Stereo(), 5.0, opener)
+    stream.switch(True, None)
+    track = NavTrack()
+    to_agent: list[float] = []
+    first = last = None
+    end = time.monotonic() + args.seconds + 3.0
+    while time.monotonic() < end:
+        now = time.time()
+        track.add(NavState(now, 0, 0, 0, 0, 0, None, 1.0, 0.0))
+        for frame in stream.collect(track, time.monotonic()):
+            delivered = time.time()
+            to_agent.append(delivered - frame.time)
+            first = first or delivered
+            last = delivered
+        time.sleep(0.2)
+    stream.close()
+    child.wait(10)
+    n = len(to_agent)
+    rate = (n - 1) / (last - first) if n > 1 and first and last else 0.0
+
+    def ms(values: list[float]) -> str:
+        v = np.array(values) * 1000.0
+        return f"median {np.median(v):.1f} ms, p95 {np.percentile(v, 95):.1f} ms, max {v.max():.1f} ms"
+
+    print(f"stereo {width}x{height} mono8 at {args.rate:g} Hz over Zenoh (TCP loopback, peer to peer), "
+          f"{args.seconds:g} s")
+    print(f"  pairs delivered to the agents: {n} ({rate:.1f} pairs/s); dropped {stream.stats.dropped}; "
+          f"received {stream.stats.received}")
+    print(f"  sensor stamp -> driver (transport + CDR decoding): {ms(transport)}")
+    print(f"  sensor stamp -> agent (at the next 5 Hz control tick): {ms(to_agent)}")
+
+
+def speedup(args: argparse.Namespace) -> None:
+    auv = [sys.executable, "-m", "mission"]
+    udp, tcp = free_port(socket.SOCK_DGRAM), free_port()
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "run"
+        server = subprocess.Popen([*auv, "sim", "serve", args.mission, "--mavlink", f"udpout:127.0.0.1:{udp}",
+                                   "--speedup", str(args.speedup), "--zenoh", f"tcp/127.0.0.1:{tcp}", "-q"],
+                                  cwd=ROOT, stdout=subprocess.DEVNULL)
+        try:
+            subprocess.run([*auv, "run", args.mission, "--vehicle", f"mavlink:udpin:127.0.0.1:{udp}",
+                            "--sensor-driver", f"zenoh:auv/sim?connect=tcp/127.0.0.1:{tcp}", "--out", str(out)],
+                           cwd=ROOT, check=False)
+        finally:
+            server.terminate()
+            server.wait(20)
+        metrics = json.loads((out / "metrics.json").read_text())
+    print(f"{args.mission} at --speedup {args.speedup:g}: completed {metrics['completed']}, "
+          f"{metrics['mission_time_s']:.0f} s of vehicle time in {metrics['wall_time_s']:.0f} s")
+    for name, s in metrics.get("sensors", {}).items():
+        print(f"  {name:<8} received {s['received']:>6}  delivered {s['delivered']:>6}  dropped {s['dropped']:>4}  "
+              f"stale {s['stale']:>3}  lost {s['lost_events']}  queue latency median {s['queue_latency_median_s']} s")
+
+
+def main() -> None:
+    if len(sys.argv) > 1 and sys.argv[1] == "_publish":
+        port, seconds, rate, width, height = sys.argv[2:7]
+        publish(int(port), float(seconds), float(rate), int(width), int(height))
+        return
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="what", required=True)
+    p = sub.add_parser("latency")
+    p.add_argument("--seconds", type=float, default=20.0)
+    p.add_argument("--rate", type=float, default=10.0)
+    p.add_argument("--size", default="1200x900")
+    p.set_defaults(func=latency)
+    p = sub.add_parser("speedup")
+    p.add_argument("mission")
+    p.add_argument("--speedup", type=float, default=5.0)
+    p.set_defaults(func=speedup)
+    args = parser.parse_args()
+    args.func(args)
+
+
+if __name__ == "__main__":
+    main()
