@@ -53,15 +53,16 @@ def test_serve_publishes_the_streams_drivers_ask_for_stamped_with_the_vehicle_cl
                                                                                    tmp_path: Path) -> None:
     from tests.conftest import WORLD
 
-    mission = load_mission(write_mission("published", "  - id: hold\n    transit: {to: home, navigation: dead-reckoning}\n",
-                                         header=HEADER.replace("WORLD", str(WORLD))))
+    route = "  - id: hold\n    transit: {to: home, navigation: dead-reckoning}\n"
+    mission = load_mission(write_mission("published", route, header=HEADER.replace("WORLD", str(WORLD))))
     tcp = free_port(socket.SOCK_STREAM)
     endpoint = f"auv/sim?connect=tcp/127.0.0.1:{tcp}"
     pings, pairs = Sink(), Sink()
     with ServedVehicle(mission, f"udpout:127.0.0.1:{free_port(socket.SOCK_DGRAM)}", speedup=5.0,
                        zenoh=[f"tcp/127.0.0.1:{tcp}"]) as served:
-        sonar = open_driver(f"zenoh:{endpoint}", DriverContext("mbes", mission.sensors.mbes, pings))  # type: ignore[arg-type]
-        camera = open_driver(f"zenoh:{endpoint}", DriverContext("stereo", mission.sensors.stereo, pairs))  # type: ignore[arg-type]
+        assert mission.sensors.mbes is not None and mission.sensors.stereo is not None
+        sonar = open_driver(f"zenoh:{endpoint}", DriverContext("mbes", mission.sensors.mbes, pings))
+        camera = open_driver(f"zenoh:{endpoint}", DriverContext("stereo", mission.sensors.stereo, pairs))
         try:
             time.sleep(1.5)
             assert pings.frames == [] and pairs.frames == []  # nobody asked yet
