@@ -89,9 +89,10 @@ def _sim_serve(args: argparse.Namespace) -> int:
     mission, diags = validate_mission_file(args.mission)
     if mission is None:
         raise MissionError([d for d in diags if not d.warning])
-    stop = threading.Event()
+    stop, streams_stop = threading.Event(), threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
+    signal.signal(signal.SIGUSR1, lambda *_: streams_stop.set())  # rehearse a payload failure
     seed = mission.seed if args.seed is None else args.seed
     print(f"{mission.name}: serving the simulated vehicle on {', '.join(args.mavlink)} at {args.speedup:g}x "
           f"(seed {seed})" + (f"; truth in {args.out}" if args.out else ""), flush=True)
@@ -103,7 +104,8 @@ def _sim_serve(args: argparse.Namespace) -> int:
     if args.zenoh:
         print(f"payload streams on Zenoh {', '.join(args.zenoh)} under {args.zenoh_prefix}/", flush=True)
     summary = serve(mission, args.mavlink, seed=seed, speedup=args.speedup, out=args.out, stop_event=stop,
-                    on_event=None if args.quiet else show, zenoh=args.zenoh or (), zenoh_prefix=args.zenoh_prefix)
+                    on_event=None if args.quiet else show, zenoh=args.zenoh or (), zenoh_prefix=args.zenoh_prefix,
+                    streams_stop=streams_stop)
     print(f"stopped: {summary.sim_time:.1f} s of vehicle time in {summary.wall_time:.1f} s "
           f"({summary.steps} steps)", flush=True)
     return 0
@@ -121,7 +123,8 @@ def _add_sim_parser(sub: Any) -> None:
     p.add_argument("--out", help="write the truth here as it goes (mission.yaml, world.yaml, trajectory.csv, "
                    "usbl.csv, autopilot.jsonl)")
     p.add_argument("--zenoh", action="append", metavar="ENDPOINT",
-                   help="also publish the payload streams on Zenoh, listening here, e.g. tcp/127.0.0.1:7447")
+                   help="also publish the payload streams on Zenoh, listening here, e.g. tcp/127.0.0.1:7447 "
+                   "(SIGUSR1 stops them, to rehearse a payload failure)")
     p.add_argument("--zenoh-prefix", default="auv/sim", metavar="KEY", help="key prefix (default auv/sim)")
     p.add_argument("-q", "--quiet", action="store_true", help="do not print the autopilot's events")
     p.set_defaults(func=_sim_serve)

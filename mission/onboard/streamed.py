@@ -50,7 +50,7 @@ class StreamedVehicle:
             change = stream.check(wall)
             if change == "lost":
                 self.emit("sensor_lost", nav.time, sensor=name, driver=stream.uri, timeout_s=stream.timeout,
-                          silent_s=round(stream.silent_for(wall), 2))
+                          silent_s=round(wall - max(stream.last_arrival, stream.switched_on), 2))
             elif change == "recovered":
                 self.emit("sensor_recovered", nav.time, sensor=name, driver=stream.uri)
             frames.extend(stream.collect(self.track, wall))

@@ -4,7 +4,9 @@ bounded queue (`DropOldestQueue`) from its own thread, watched for silence, and 
 `collect(track)` hands out the frames whose stamps the navigation estimate has reached, pings and scans placed
 with the estimate interpolated to their stamp (`NavTrack.at`); a frame ahead of the estimate waits for the next
 tick. A stream that is on and has delivered nothing for its sensor's `timeout` (wall seconds: a stream's silence
-is the host's to see) is lost: `check` reports it once; a frame arriving later recovers it. Nothing here blocks.
+is the host's to see) is lost: `check` reports it once; a frame arriving later recovers it. A sensor just switched
+on has `STARTUP_GRACE_S` more for its first frame (the request has to reach it, and it has to start). Nothing
+here blocks.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from mission.vehicle import ScanFrame, SonarPing
 
 QUEUE_FRAMES = {"mbes": 64, "scanner": 16, "stereo": 4}  # a few control ticks' worth of each stream
 MAX_WAIT_S = 2.0  # s of vehicle time a frame may wait for the estimate to reach its stamp
+STARTUP_GRACE_S = 3.0  # s of wall time a sensor just switched on has, beyond its timeout, for its first frame
 
 
 @dataclass
@@ -57,7 +60,7 @@ class SensorStream:
         self.stats = StreamStats()
         self.on = False
         self.lost = False
-        self._watch_from = time.monotonic()
+        self.switched_on = time.monotonic()
         self.last_arrival = -math.inf
         self.driver = opener(uri, DriverContext(sensor, settings, self._take))
 
@@ -69,13 +72,16 @@ class SensorStream:
 
     def switch(self, on: bool, rate_hz: float | None) -> None:
         if on and not self.on:
-            self._watch_from = time.monotonic()
+            self.switched_on = time.monotonic()
             self.queue.drain()  # frames from while it was off are not wanted
         self.on = on
         self.driver.request(on, rate_hz)
 
     def silent_for(self, now: float) -> float:
-        return now - max(self.last_arrival, self._watch_from)
+        """Seconds without a frame; since the switch-on, less the start-up grace, while none has come since."""
+        if self.last_arrival >= self.switched_on:
+            return now - self.last_arrival
+        return now - self.switched_on - STARTUP_GRACE_S
 
     def check(self, now: float) -> str:
         """`lost` when the stream has just gone silent for its timeout, `recovered` when it speaks again."""

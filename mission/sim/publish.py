@@ -4,8 +4,10 @@
 The multibeam, scanner and stereo camera are the `SimulatedVehicle`'s own: cast or rendered from the TRUE pose
 at the vehicle's clock, stamped with it. A sensor runs while a driver asks for it (`PREFIX/SENSOR/request`, which
 the `zenoh` driver republishes twice a second), as a payload controller switches it; a request unheard for
-`REQUEST_TIMEOUT` s of wall time switches it off. The stereo camera needs MuJoCo (the `[sim]` extra); without it
-only the streams that can run are published, and `unavailable` says which could not.
+`REQUEST_TIMEOUT` s of wall time switches it off. Every sensor of the mission is built when the publisher starts
+(as a vehicle powers its payload at boot), so a switch takes effect at the next step. The multibeam and the stereo
+camera need MuJoCo (the `[sim]` extra); without it only the streams that can run are published, and
+`unavailable` says which could not (a `stream_unavailable` event).
 """
 
 from __future__ import annotations
@@ -41,6 +43,21 @@ class StreamPublisher:
             MBES_POINTS, SCANNER_POINTS, "stereo/left/image_raw", "stereo/right/image_raw",
             "stereo/left/camera_info", "stereo/right/camera_info")}
         self._sub = self.session.declare_subscriber(f"{self.prefix}/*/request", self._on_request)
+        self._power_up()
+
+    def _power_up(self) -> None:
+        """Build every sensor the mission has at start (a MuJoCo world, a camera), as a vehicle powers its payload
+        at boot, so that switching one on later is immediate."""
+        v = self.vehicle
+        for sensor in SENSORS:
+            if getattr(v.mission.sensors, sensor) is None:
+                continue
+            try:
+                v.set_payload(frozenset({sensor}))
+            except ImportError as exc:
+                self.unavailable[sensor] = f"needs the [sim] extra ({exc.name or exc})"
+                self.log("stream_unavailable", sensor=sensor, reason=self.unavailable[sensor])
+        v.set_payload(frozenset())
 
     def _on_request(self, sample: Any) -> None:
         sensor = str(sample.key_expr).split("/")[-2]
@@ -63,14 +80,7 @@ class StreamPublisher:
             return
         self._applied = (wanted, rate)
         v = self.vehicle
-        try:
-            v.set_payload(wanted)
-        except ImportError as exc:  # MuJoCo missing: the rendered or ray-cast streams cannot run
-            for s in wanted:
-                if getattr(v, {"mbes": "mbes", "stereo": "camera", "scanner": "scanner"}[s]) is None:
-                    self.unavailable[s] = f"needs the [sim] extra ({exc.name or exc})"
-                    self.log("stream_unavailable", sensor=s, reason=self.unavailable[s])
-            v.set_payload(frozenset(s for s in wanted if s not in self.unavailable))
+        v.set_payload(wanted)
         v.set_frame_rate(rate)
         self.log("payload_switched", sensors=sorted(wanted), frame_rate_hz=rate)
 

@@ -100,10 +100,11 @@ def serve(mission: Mission, address: str | Sequence[str], seed: int | None = Non
           out: str | Path | None = None, stop_event: threading.Event | None = None,
           gcs_timeout: float = FS_GCS_TIMEOUT, dt: float = 0.2,
           on_event: Callable[[dict[str, Any]], None] | None = None, zenoh: Sequence[str] = (),
-          zenoh_prefix: str = "auv/sim") -> ServeSummary:
+          zenoh_prefix: str = "auv/sim", streams_stop: threading.Event | None = None) -> ServeSummary:
     """Serve `mission`'s simulated vehicle on `address` (one pymavlink connection string or several) until
     `stop_event` is set; returns what happened. `on_event` sees each autopilot event as it happens. With `zenoh`
-    endpoints (`tcp/127.0.0.1:7447`), the payload streams are published under `zenoh_prefix`."""
+    endpoints (`tcp/127.0.0.1:7447`), the payload streams are published under `zenoh_prefix`; setting
+    `streams_stop` ends them (the Zenoh session closes, as if the payload computer died) while the vehicle goes on."""
     if mission.world is None:
         raise AuvError(f"mission '{mission.name}' names no world; serving it needs `world:`")
     if speedup <= 0:
@@ -163,6 +164,11 @@ def serve(mission: Mission, address: str | Sequence[str], seed: int | None = Non
             summary.steps += 1
             autopilot.check()
             autopilot.telemetry(dt)
+            if streams is not None and streams_stop is not None and streams_stop.is_set():
+                summary.published = dict(streams.published)
+                streams.close()
+                streams = None
+                log("streams_stopped")
             if streams is not None:
                 streams.publish()
             if now >= next_beat:

@@ -9,6 +9,7 @@ import signal
 import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +18,8 @@ import pytest
 pytest.importorskip("mujoco")
 pytest.importorskip("zenoh")
 pytest.importorskip("rosbags")
+
+from mission.sensors.streams import STARTUP_GRACE_S  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 AUV = [sys.executable, "-m", "mission"]
@@ -91,6 +94,11 @@ def fly(mission: Path, tmp_path: Path, publish: bool, timeout: float = 120.0) ->
     return runner.returncode, runner.stdout + runner.stderr, out
 
 
+def last_time(trajectory: Path) -> float:
+    rows = trajectory.read_text().splitlines() if trajectory.exists() else []
+    return float(rows[-1].split(",")[0]) if len(rows) > 1 else -1.0
+
+
 def events(folder: Path) -> list[dict[str, Any]]:
     return [json.loads(line) for line in (folder / "events.jsonl").read_text().splitlines()]
 
@@ -123,9 +131,50 @@ def test_a_stream_that_never_comes_is_lost_within_its_timeout_and_the_mission_go
     started = next(e for e in log if e["event"] == "element_started" and e["element"] == "survey")
     lost = [e for e in log if e["event"] == "sensor_lost"]
     assert len(lost) == 1 and lost[0]["sensor"] == "mbes"
-    assert lost[0]["time"] - started["time"] <= (1.0 + 1.0) * SPEEDUP  # the timeout (wall s) and a tick or two
+    # the timeout and the start-up grace of a sensor just switched on (wall s), and a tick
+    assert lost[0]["time"] - started["time"] <= (1.0 + STARTUP_GRACE_S + 0.5) * SPEEDUP
     metrics = json.loads((out / "metrics.json").read_text())
     statuses = {e["id"]: (e["status"], e.get("reason", "")) for e in metrics["elements"]}
     assert statuses["survey"] == ("failed", "sensor lost: mbes")
     assert statuses["leave"][0] == "succeeded"  # on_failure: continue
     assert metrics["sensors"]["mbes"]["lost_events"] == 1
+
+
+def test_killing_the_stream_mid_survey_is_sensor_lost_within_the_timeout_and_the_mission_goes_on(
+        tmp_path: Path) -> None:
+    mission = write_mission(tmp_path, LAST_LEG)
+    udp, tcp = free_port(socket.SOCK_DGRAM), free_port(socket.SOCK_STREAM)
+    out = tmp_path / "run"
+    server = subprocess.Popen([*AUV, "sim", "serve", str(mission), "--mavlink", f"udpout:127.0.0.1:{udp}",
+                               "--speedup", str(SPEEDUP), "--zenoh", f"tcp/127.0.0.1:{tcp}", "-q"], cwd=ROOT,
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    runner = subprocess.Popen([*AUV, "run", str(mission), "--vehicle", f"mavlink:udpin:127.0.0.1:{udp}",
+                               "--sensor-driver", f"zenoh:auv/sim?connect=tcp/127.0.0.1:{tcp}", "--out", str(out)],
+                              cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        started = None
+        while time.monotonic() < deadline:
+            log = events(out) if (out / "events.jsonl").exists() else []
+            started = next((e for e in log if e["event"] == "element_started" and e["element"] == "survey"), None)
+            if started is not None and last_time(out / "trajectory.csv") > started["time"] + 20.0:
+                break
+            time.sleep(0.1)
+        assert started is not None
+        server.send_signal(signal.SIGUSR1)  # the payload streams stop; the vehicle goes on
+        killed_at = last_time(out / "trajectory.csv")
+        output, _ = runner.communicate(timeout=90)
+    finally:
+        runner.kill()
+        server.send_signal(signal.SIGTERM)
+        server.communicate(timeout=20)
+    assert runner.returncode == 1, output
+    log = events(out)
+    lost = [e for e in log if e["event"] == "sensor_lost"]
+    assert len(lost) == 1 and lost[0]["sensor"] == "mbes"
+    assert 0.0 < lost[0]["time"] - killed_at <= (1.0 + 0.5) * SPEEDUP  # the 1 s timeout, in vehicle seconds
+    metrics = json.loads((out / "metrics.json").read_text())
+    statuses = {e["id"]: (e["status"], e.get("reason", "")) for e in metrics["elements"]}
+    assert statuses["survey"] == ("failed", "sensor lost: mbes")
+    assert statuses["leave"][0] == "succeeded"
+    assert metrics["sensors"]["mbes"]["delivered"] >= 150  # the survey had its pings until the kill
