@@ -24,7 +24,7 @@ from mission.sensors.navtrack import NavTrack
 from mission.sensors.queue import DropOldestQueue
 from mission.vehicle import ScanFrame, SonarPing
 
-QUEUE_FRAMES = {"mbes": 64, "scanner": 16, "stereo": 4}  # a few control ticks' worth of each stream
+QUEUE_FRAMES = {"mbes": 256, "scanner": 32, "stereo": 4}  # ~1 MB, ~2 MB, ~9 MB at the reference sizes
 MAX_WAIT_S = 2.0  # s of vehicle time a frame may wait for the estimate to reach its stamp
 STARTUP_GRACE_S = 3.0  # s of wall time a sensor just switched on has, beyond its timeout, for its first frame
 
