@@ -17,7 +17,7 @@ demo: $(STAMP)
 	$(BIN)/auv simulate missions/field_survey.yaml --out runs/demo
 
 test: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m pytest -n auto --dist worksteal
+	MPLBACKEND=Agg $(BIN)/python -m pytest -n auto --dist worksteal --durations=20
 
 lint: $(STAMP)
 	$(BIN)/ruff check mission planners perception_plugins tests

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from mission.cli_onboard import add_onboard_commands
+from mission.cli_plan import add_plan_commands
 from mission.errors import AuvError, MissionError
 from mission.extras import has, require
 
@@ -21,9 +22,14 @@ def _validate(args: argparse.Namespace) -> int:
 
     status = 0
     for path in args.missions:
-        _, diags = validate_mission_file(path)
+        mission, diags = validate_mission_file(path)
         for d in diags:
             print(d)
+        if args.estimate and mission is not None:
+            from mission.cli_plan import print_estimate
+            from mission.estimate import estimate_mission
+
+            print_estimate(estimate_mission(mission), args.json)
         errors = sum(1 for d in diags if not d.warning)
         warnings = len(diags) - errors
         if errors:
@@ -65,7 +71,7 @@ def _simulate(args: argparse.Namespace) -> int:
         return _campaign(args, mission.name)
     out = Path(args.out) if args.out else Path("runs") / mission.name
     result = simulate(mission, seed=args.seed, out=out, plots=not args.no_plots, progress=not args.quiet,
-                      record_stereo=args.record_stereo)
+                      record_stereo=args.record_stereo, plugin_latency_s=args.plugin_latency)
     m = result.metrics
     state = "completed" if m["completed"] else ("ABORTED: " + (m["abort_reason"] or "") if m["aborted"]
                                                  else "not completed")
@@ -80,6 +86,18 @@ def _simulate(args: argparse.Namespace) -> int:
         pairs = len(result.vehicle.log.frames)
         print(f"stereo stream: {pairs} pair(s) in {out / 'stereo'} (KITTI layout; `auv vo {out / 'stereo'}`)")
     return 0 if m["completed"] else 1
+
+
+def _latency(text: str) -> float | None:
+    if text == "measured":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is neither a number of seconds nor 'measured'") from None
+    if not 0.0 <= value <= 60.0:
+        raise argparse.ArgumentTypeError(f"{value:g} s is outside 0-60 s")
+    return value
 
 
 def _campaign(args: argparse.Namespace, name: str) -> int:
@@ -100,7 +118,8 @@ def _campaign(args: argparse.Namespace, name: str) -> int:
         print(f"  seed {row['seed']:>5}  {state:<13} {row['mission_time_s']:7.0f} s  wall {row['wall_time_s']:6.0f} s"
               + (f"  failed: {', '.join(failed)}" if failed else ""), flush=True)
 
-    report = run_campaign(args.mission, seeds, out, jobs=args.jobs, plots=not args.no_plots, on_run=line)
+    report = run_campaign(args.mission, seeds, out, jobs=args.jobs, plots=not args.no_plots, on_run=line,
+                          plugin_latency_s=args.plugin_latency)
     s = report["summary"]
     print(f"completed {s['completed']}/{s['runs']} ({s['completed_percent']:g} %), aborted {s['aborted']}, "
           f"crashed {s['crashed']}, safety violations {s['safety_violations']}")
@@ -216,6 +235,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("validate", help="check missions and report every problem as FILE:LINE:COL")
     p.add_argument("missions", nargs="+", help="mission YAML files")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing for valid missions")
+    p.add_argument("--estimate", action="store_true",
+                   help="also print each valid mission's distance, duration, energy and coverage estimate")
+    p.add_argument("--json", action="store_true", help="with --estimate, the estimate as JSON")
     p.set_defaults(func=_validate)
 
     p = sub.add_parser("schema", help="print the JSON Schema of the mission language")
@@ -233,6 +255,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.add_argument("--record-stereo", action="store_true",
                    help="write the stereo stream and true poses to DIR/stereo/ (KITTI odometry layout)")
+    p.add_argument("--plugin-latency", type=_latency, default=0.1, metavar="S|measured",
+                   help="each perception plug-in call's latency charged to the simulated clock (default 0.1 s: "
+                   "runs repeat exactly for a seed); 'measured': the call's CPU time, so the run depends on the "
+                   "machine")
     p.set_defaults(func=_simulate)
 
     p = sub.add_parser("plot", help="redraw a run folder's figures from its files")
@@ -279,6 +305,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--extend", help="extend this existing model with the run's views instead")
     p.set_defaults(func=_model_build)
     add_onboard_commands(sub)
+    add_plan_commands(sub)
     return parser
 
 

@@ -17,9 +17,12 @@ then on every call is answered "no answer" at once, without more events.
 
 Two clocks (`Timing.simulated`). Onboard, a result is ready when its answer has arrived. In simulation the
 simulator is paused while code thinks, so the call's cost is charged to the simulated clock: ready at
-`max(submitted, worker free) + latency`, where latency is the worker's CPU time for the call rounded up to
-`quantum_s` (so that runs repeat for a seed except when a latency falls near a quantum's edge). A crash is
-charged one quantum, a hang the budget, and a worker's restart its start-up CPU time rounded up to 0.1 s.
+`max(submitted, worker free) + latency`. With a modelled latency (`Timing.latency_s`, the simulator's default)
+every call is charged that latency, and a worker's restart `RESTART_CHARGE_S`, so that a run repeats exactly for
+its seed on any machine under any load. With `latency_s` None the latency is the worker's CPU time for the call
+rounded up to `quantum_s`, and a restart its start-up CPU time rounded up to 0.1 s: closer to what this plug-in
+costs, but a run then depends on the machine. Either way a crash is charged one quantum and a hang the budget, and
+the measured CPU times are kept (`RoleWorker.cpu_s`) for the run's metrics.
 """
 
 from __future__ import annotations
@@ -36,6 +39,8 @@ from mission.plugin_api import OdometryResult, ReferencingResult
 from mission.plugin_worker import Message, WorkerProcess
 
 RESTART_QUANTUM_S = 0.1
+SIMULATED_LATENCY_S = 0.1  # the simulator's modelled latency of a call: ready at the next 0.2 s control tick
+RESTART_CHARGE_S = 1.0  # a modelled restart: start a process, import and configure the plug-in
 
 
 @dataclass(frozen=True)
@@ -47,10 +52,18 @@ class Timing:
     hard_timeout_s: float = 5.0  # wall time after which a running call is abandoned and its worker killed
     quantum_s: float = 0.01  # simulation: charged latencies are rounded up to a multiple of this
     start_timeout_s: float = 60.0  # wall time a worker may take to import and configure its plug-in
+    latency_s: float | None = None  # simulation: every call's modelled latency (None: its CPU time)
 
     def charge(self, cpu_s: float, quantum_s: float | None = None) -> float:
+        """Simulation: the latency charged for a call that took `cpu_s` of CPU."""
+        if self.latency_s is not None:
+            return self.latency_s
         q = self.quantum_s if quantum_s is None else quantum_s
         return max(1, math.ceil(cpu_s / q - 1e-9)) * q
+
+    def charge_restart(self, cpu_s: float) -> float:
+        """Simulation: the time charged for restarting a worker whose start-up took `cpu_s` of CPU."""
+        return RESTART_CHARGE_S if self.latency_s is not None else self.charge(cpu_s, RESTART_QUANTUM_S)
 
 
 class PluginCall:
@@ -108,6 +121,8 @@ class RoleWorker:
         self.faults: list[Fault] = []
         self.broken: str | None = None
         self.free_at = -math.inf  # simulation: when the worker is done with what it has been given
+        self.cpu_s: list[float] = []  # the CPU time of each answered call, as measured in the worker
+        self.fault_count = 0
         self._seq = 0
         self._dying: list[WorkerProcess] = []
         self._charge_start = False
@@ -188,7 +203,7 @@ class RoleWorker:
 
     def lower_bound(self, call: PluginCall) -> float:
         """Simulation: the earliest time `call` can be ready, known without waiting for the worker."""
-        return max(call.submitted_at, self.free_at) + self.timing.quantum_s
+        return max(call.submitted_at, self.free_at) + min(self.timing.quantum_s, self.timing.charge(0.0))
 
     def pump(self, timeout: float = 0.0) -> None:
         """Read what the worker has sent (waiting up to `timeout` s for it), then act on a crash or a hang."""
@@ -220,7 +235,7 @@ class RoleWorker:
             self.ready = True
             self.head_since = time.monotonic()
             if self._charge_start and self.timing.simulated:
-                self.free_at += self.timing.charge(float(message[1]), RESTART_QUANTUM_S)
+                self.free_at += self.timing.charge_restart(float(message[1]))
             self._charge_start = False
         elif kind == "start_failed":
             self._break(f"restart failed: {message[1]}")
@@ -237,6 +252,7 @@ class RoleWorker:
 
     def _answered(self, call: PluginCall, ok: bool, payload: Any, cpu_s: float, wall_s: float) -> None:
         t = self.timing
+        self.cpu_s.append(cpu_s)
         spent = cpu_s if t.simulated else wall_s
         start = max(call.submitted_at, self.free_at)
         ready = start + (t.charge(cpu_s) if spent <= t.budget_s else t.budget_s)
@@ -292,6 +308,7 @@ class RoleWorker:
 
     def _fault(self, call: PluginCall | None, why: str, elapsed_ms: float, due: float | None,
                **details: Any) -> None:
+        self.fault_count += 1
         fields: dict[str, Any] = {"plugin": self.spec, "role": self.role, "error": why,
                                   "elapsed_ms": round(elapsed_ms, 1), **details}
         if call is not None:

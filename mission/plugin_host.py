@@ -13,7 +13,8 @@ Two clocks (`simulated_clock`):
   `poll` never blocks. The budget is wall time, and a call still running at `budget_s` is abandoned and its
   worker restarted (the hard timeout is the budget).
 - simulation (`auv simulate`): the simulator is paused while code thinks, so a call's latency is charged to the
-  simulated clock (the worker's CPU time, rounded up to `quantum_s`, default 10 ms). `poll(now)` is None before
+  simulated clock: `latency_s` (a modelled latency, so that a run repeats exactly for its seed) or, with
+  `latency_s` None, the worker's CPU time rounded up to `quantum_s` (default 10 ms). `poll(now)` is None before
   the call can be ready, and when `now` may have reached its ready time it blocks until the worker has answered
   (at most the hard timeout). The budget is the worker's CPU time; the hard timeout, wall time, is
   `max(3 × budget_s, 30 s)` so that a loaded CI machine never kills a healthy call.
@@ -43,14 +44,14 @@ class PluginHost:
     def __init__(self, roles: Mapping[str, str | None], settings: Mapping[str, Any], emit: Callable[..., None],
                  budget_s: float = DEFAULT_BUDGET_S, simulated_clock: bool = False,
                  hard_timeout_s: float | None = None, quantum_s: float = 0.01, start_timeout_s: float = 60.0,
-                 close_timeout_s: float = 5.0):
+                 close_timeout_s: float = 5.0, latency_s: float | None = None):
         """Start and configure a worker per named plug-in (in parallel); a plug-in that fails to load or to
         configure raises PluginError here, after the other workers have been stopped."""
         self.emit = emit
         self.budget_s = budget_s
         if hard_timeout_s is None:
             hard_timeout_s = max(3.0 * budget_s, SIMULATED_HARD_TIMEOUT_S) if simulated_clock else budget_s
-        self.timing = Timing(simulated_clock, budget_s, hard_timeout_s, quantum_s, start_timeout_s)
+        self.timing = Timing(simulated_clock, budget_s, hard_timeout_s, quantum_s, start_timeout_s, latency_s)
         self.close_timeout_s = close_timeout_s
         self.names: dict[str, str] = {}
         self.workers: dict[str, RoleWorker] = {}
@@ -74,6 +75,19 @@ class PluginHost:
 
     def has(self, role: str) -> bool:
         return role in self.workers
+
+    def stats(self) -> dict[str, dict[str, Any]]:
+        """Per role: the plug-in, its calls answered, its faults, and the CPU time its calls took (measured in
+        the worker; in simulation, compare with the latency charged)."""
+        out: dict[str, dict[str, Any]] = {}
+        for role, worker in self.workers.items():
+            cpu = sorted(worker.cpu_s)
+            out[role] = {"plugin": self.names[role], "calls": len(cpu), "faults": worker.fault_count,
+                         "cpu_ms_median": round(1e3 * cpu[len(cpu) // 2], 1) if cpu else None,
+                         "cpu_ms_max": round(1e3 * cpu[-1], 1) if cpu else None,
+                         "charged_ms": None if self.timing.latency_s is None or not self.timing.simulated
+                         else round(1e3 * self.timing.latency_s, 1)}
+        return out
 
     def submit(self, role: str, frame: StereoImages, request: Any, now: float) -> PluginCall:
         """Hand a frame to a plug-in without waiting for it; `PluginCall.poll(now)` gives the result once it is

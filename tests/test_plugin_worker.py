@@ -16,7 +16,7 @@ import pytest
 
 from mission.errors import PluginError
 from mission.plugin_api import ReferencingResult, StereoImages
-from mission.plugin_calls import PluginCall
+from mission.plugin_calls import RESTART_CHARGE_S, PluginCall
 from mission.plugin_host import PluginHost
 from mission.plugins import load_plugin
 from mission.testing_plugins import FAULT, EchoPlugin
@@ -246,6 +246,30 @@ def test_in_simulated_time_a_crash_is_charged_a_quantum_and_the_restart_its_star
     assert 2.01 + 0.1 <= queued.ready_at - 0.01 < 2.01 + 3.0  # the fresh interpreter's CPU time, in 0.1 s steps
     assert queued.poll(queued.ready_at - 0.005) is None
     assert [t for e, t, _ in recorder.events] == [pytest.approx(2.01)]
+
+
+def test_with_a_modelled_latency_every_call_is_ready_exactly_that_latency_after_it_could_start(host_of):
+    """The simulator's default: whatever the call's CPU time (0.3 s here, and a loaded machine's), a result is
+    ready a fixed latency after the worker could take it, so a run repeats exactly for its seed."""
+    host, recorder = host_of("SlowPlugin", {"cpu_s": 0.3}, simulated_clock=True, latency_s=0.1)
+    first = host.submit("referencing", frame(4.0), None, 4.0)
+    second = host.submit("referencing", frame(4.0), None, 4.0)
+    assert first.poll(4.09) is None
+    assert first.poll(4.1).recognised and first.ready_at == pytest.approx(4.1, abs=1e-12)
+    assert second.poll(4.15) is None
+    assert second.poll(4.2).recognised and second.ready_at == pytest.approx(4.2, abs=1e-12)
+    [stats] = host.stats().values()
+    assert stats["calls"] == 2 and stats["charged_ms"] == 100.0 and stats["cpu_ms_median"] >= 290.0
+    assert recorder.faults() == []
+
+
+def test_with_a_modelled_latency_a_crash_costs_a_quantum_and_the_restart_a_fixed_time(host_of):
+    host, recorder = host_of("SegfaultingPlugin", simulated_clock=True, latency_s=0.1)
+    crashed = host.submit("referencing", frame(2.0), FAULT, 2.0)
+    queued = host.submit("referencing", frame(2.0), None, 2.0)
+    assert not crashed.poll(2.01).recognised and crashed.ready_at == pytest.approx(2.01)
+    assert queued.poll(10.0).recognised
+    assert queued.ready_at == pytest.approx(2.01 + RESTART_CHARGE_S + 0.1, abs=1e-9)
 
 
 def test_a_plugin_that_fails_to_configure_is_a_plugin_error_at_construction():

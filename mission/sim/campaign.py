@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from mission.errors import AuvError
+from mission.plugin_calls import SIMULATED_LATENCY_S
 
 _RANGE = re.compile(r"^\s*(-?\d+)\s*(?:-\s*(-?\d+))?\s*$")
 
@@ -121,20 +122,23 @@ def aggregate(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
     return out
 
 
-def _run_one(mission_path: str, seed: int, out: str, plots: bool) -> dict[str, Any]:
+def _run_one(mission_path: str, seed: int, out: str, plots: bool,
+             plugin_latency_s: float | None = SIMULATED_LATENCY_S) -> dict[str, Any]:
     """Worker: one seeded run into its own folder; the summary row, or the error that stopped it."""
     from mission.language import load_mission
     from mission.sim.run import simulate
 
     try:
-        result = simulate(load_mission(mission_path), seed=seed, out=out, plots=plots)
+        result = simulate(load_mission(mission_path), seed=seed, out=out, plots=plots,
+                          plugin_latency_s=plugin_latency_s)
     except Exception as exc:  # noqa: BLE001 - one crashed run must not end the campaign; it is recorded
         return {"seed": seed, "error": f"{type(exc).__name__}: {exc}", "traceback": traceback.format_exc()}
     return run_summary(result.metrics)
 
 
 def run_campaign(mission_path: str | Path, seeds: Sequence[int], out: str | Path, jobs: int = 1,
-                 plots: bool = False, on_run: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
+                 plots: bool = False, on_run: Callable[[dict[str, Any]], None] | None = None,
+                 plugin_latency_s: float | None = SIMULATED_LATENCY_S) -> dict[str, Any]:
     """Run `mission_path` once per seed (`jobs` processes at a time) into `out/seed-N/`; returns and writes
     `out/campaign.json` (rewritten after every run)."""
     out_dir = Path(out)
@@ -155,13 +159,14 @@ def run_campaign(mission_path: str | Path, seeds: Sequence[int], out: str | Path
     jobs = max(1, min(jobs, len(seeds)))
     if jobs == 1:
         for seed in seeds:
-            record(_run_one(str(mission_path), seed, str(out_dir / f"seed-{seed}"), plots))
+            record(_run_one(str(mission_path), seed, str(out_dir / f"seed-{seed}"), plots, plugin_latency_s))
     else:
         # spawn: a forked child would inherit the parent's MuJoCo/OpenGL state
         ctx = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
             pending: set[Future[dict[str, Any]]] = {
-                pool.submit(_run_one, str(mission_path), s, str(out_dir / f"seed-{s}"), plots) for s in seeds}
+                pool.submit(_run_one, str(mission_path), s, str(out_dir / f"seed-{s}"), plots, plugin_latency_s)
+                for s in seeds}
             while pending:
                 finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                 for f in finished:

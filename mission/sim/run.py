@@ -13,6 +13,7 @@ from mission.events import EventLog
 from mission.executive import ExecutionReport, Executive
 from mission.language.loader import load_world
 from mission.language.models import Mission
+from mission.plugin_calls import SIMULATED_LATENCY_S
 from mission.plugin_host import PluginHost
 from mission.plugin_settings import plugin_settings
 from mission.sim.metrics import run_metrics
@@ -41,10 +42,18 @@ def check_supported(mission: Mission) -> None:
             f"(used by {where}); supported: {', '.join(sorted(REGISTRY))}")
 
 
+DEFAULT_PLUGIN_LATENCY_S = SIMULATED_LATENCY_S
+
+
 def simulate(mission: Mission, seed: int | None = None, out: str | Path | None = None, plots: bool = True,
-             progress: bool = False, dt: float = 0.2, record_stereo: bool = False) -> RunResult:
+             progress: bool = False, dt: float = 0.2, record_stereo: bool = False,
+             plugin_latency_s: float | None = DEFAULT_PLUGIN_LATENCY_S) -> RunResult:
     """Run `mission` in its world with a simulated vehicle; with `out`, write the run folder there (and with
-    `record_stereo`, the stereo stream in `out/stereo/`, KITTI layout: `mission.sim.stereo_record`)."""
+    `record_stereo`, the stereo stream in `out/stereo/`, KITTI layout: `mission.sim.stereo_record`).
+
+    Perception plug-ins run in worker processes and each call's latency is charged to the simulated clock:
+    `plugin_latency_s` per call (a run then repeats exactly for its seed), or with None the call's measured CPU
+    time (closer to this plug-in's cost, but the run depends on the machine and its load)."""
     check_supported(mission)
     if mission.world is None:
         raise AuvError(f"mission '{mission.name}' names no world; simulation needs `world:`")
@@ -80,7 +89,8 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
     wall0 = time.perf_counter()
     host: PluginHost | None = None
     try:
-        host = PluginHost(mission.plugins.model_dump(), plugin_settings(mission), emit, simulated_clock=True) \
+        host = PluginHost(mission.plugins.model_dump(), plugin_settings(mission), emit, simulated_clock=True,
+                          latency_s=plugin_latency_s) \
             if any(mission.plugins.model_dump().values()) else None
         from mission.artifacts import Artifacts
 
@@ -95,6 +105,8 @@ def simulate(mission: Mission, seed: int | None = None, out: str | Path | None =
             bar.close()
     wall = time.perf_counter() - wall0
     metrics = run_metrics(mission.name, seed, report, vehicle, scene, wall)
+    if host is not None:
+        metrics["plugins"] = host.stats()
     if out_dir is not None:
         from mission.runfolder import write_run_results
         from mission.sim.photos import write_photos
