@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from mission.errors import MissionError
+from mission.errors import Diagnostic, MissionError
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -22,8 +22,8 @@ def _run(args: argparse.Namespace) -> int:
     for d in diags:
         print(d, file=sys.stderr)
     out = Path(args.out) if args.out else Path("runs") / f"{mission.name}-onboard"
+    drivers = sensor_driver_options(mission, args.sensor_driver or [], args.mission)
     print(f"{mission.name}: connecting to {args.vehicle} (up to {args.connect_timeout:g} s)", file=sys.stderr)
-    drivers = sensor_driver_options(mission, args.sensor_driver or [])
     result = run_onboard(mission, args.vehicle, out, connect_timeout=args.connect_timeout, sensor_drivers=drivers)
     m = result.metrics
     state = "completed" if m["completed"] else ("LINK LOST" if m["link_lost"] else
@@ -39,7 +39,7 @@ def _run(args: argparse.Namespace) -> int:
     return 0 if m["completed"] else 1
 
 
-def sensor_driver_options(mission: Any, options: list[str]) -> dict[str, str]:
+def sensor_driver_options(mission: Any, options: list[str], args_mission: str = "") -> dict[str, str]:
     """`--sensor-driver` values → sensor name → driver URI (a bare URI applies to every sensor the mission has)."""
     from mission.sensors import SENSOR_NAMES
 
@@ -47,6 +47,9 @@ def sensor_driver_options(mission: Any, options: list[str]) -> dict[str, str]:
     for option in options:
         name, sep, uri = option.partition("=")
         if sep and name in SENSOR_NAMES:
+            if getattr(mission.sensors, name) is None:
+                raise MissionError([Diagnostic(str(args_mission), 1, 1, f"--sensor-driver {option}: the mission's "
+                                               f"`sensors` have no {name}")])
             drivers[name] = uri
         else:
             drivers.update({n: option for n in SENSOR_NAMES if getattr(mission.sensors, n) is not None})

@@ -93,17 +93,6 @@ class RecordingVehicle:
         return max(0.0, self.energy_start_wh - self.energy_wh)
 
 
-def attach_streams(vehicle: OnboardVehicle, mission: Mission, sensor_drivers: dict[str, str] | None,
-                   emit: Any) -> OnboardVehicle:
-    """The vehicle with the mission's payload streams attached (itself when no sensor has a driver)."""
-    streams = open_streams(mission, sensor_drivers)
-    if not streams:
-        return vehicle
-    for name, stream in streams.items():
-        emit("sensor_stream", 0.0, sensor=name, driver=stream.uri, timeout_s=stream.timeout)
-    return StreamedVehicle(vehicle, streams, emit)
-
-
 @contextmanager
 def stop_on_signals(executive: Executive) -> Iterator[None]:
     """SIGINT/SIGTERM ask the executive to stop cleanly; a second SIGINT interrupts at once."""
@@ -152,17 +141,22 @@ def run_onboard(mission: Mission, uri: str, out: str | Path, connect_timeout: fl
     wall0 = time.perf_counter()
     host: PluginHost | None = None
     try:
-        try:
-            vehicle = open_vehicle(uri, mission, VehicleOptions(connect_timeout=connect_timeout, emit=emit))
+        try:  # the streams first: a driver that cannot start refuses the run before the vehicle is armed
+            streams = open_streams(mission, sensor_drivers)
         except Exception as exc:
-            log.emit("vehicle_unavailable", 0.0, vehicle=uri, reason=str(exc))
-            raise
-        try:
-            vehicle = attach_streams(vehicle, mission, sensor_drivers, emit)
-        except BaseException as exc:
-            vehicle.close()
             log.emit("sensor_unavailable", 0.0, reason=str(exc))
             raise
+        try:
+            vehicle = open_vehicle(uri, mission, VehicleOptions(connect_timeout=connect_timeout, emit=emit))
+        except BaseException as exc:
+            for stream in streams.values():
+                stream.close()
+            log.emit("vehicle_unavailable", 0.0, vehicle=uri, reason=str(exc))
+            raise
+        if streams:
+            for name, stream in streams.items():
+                emit("sensor_stream", 0.0, sensor=name, driver=stream.uri, timeout_s=stream.timeout)
+            vehicle = StreamedVehicle(vehicle, streams, emit)
         recording = RecordingVehicle(vehicle, writer)
         try:
             roles = mission.plugins.model_dump()
