@@ -9,6 +9,11 @@ sensor driver into an onboard `SensorStream` drained by a 5 Hz control loop, and
 delivered, the latency from the sensor stamp to the driver (transport and decoding) and to the agent (at the next
 control tick), and the frames dropped.
 
+`replay-vo FOLDER`: the `replay` driver plays a KITTI-layout folder at its recorded pace into an onboard
+`SensorStream`; `stereo-vo` (`--method`, default adaptive as `auv vo` runs) takes each pair as it is delivered, in
+real time; prints the pairs delivered and dropped, the VO time per pair, and how far the poses are from
+`auv vo`'s for the same folder.
+
 `speedup`: flies MISSION with `auv run` (zenoh driver) against `auv sim serve --zenoh --speedup K` and prints each
 stream's received / delivered / dropped frames from the run's metrics.json.
 """
@@ -115,6 +120,50 @@ def latency(args: argparse.Namespace) -> None:
     print(f"  sensor stamp -> agent (at the next 5 Hz control tick): {ms(to_agent)}")
 
 
+def replay_vo(args: argparse.Namespace) -> None:
+    from mission.language.models import Stereo
+    from mission.plugin_api import OdometryRequest
+    from mission.sensors.navtrack import NavTrack
+    from mission.sensors.streams import SensorStream
+    from perception_plugins.vo import estimate_trajectory, read_kitti_sequence
+    from perception_plugins.vo.plugin import StereoOdometryPlugin
+
+    plugin = StereoOdometryPlugin()
+    plugin.configure({"method": args.method})
+    frames = len(read_kitti_sequence(args.folder))
+    stream = SensorStream("stereo", f"replay:{args.folder}", Stereo(), 5.0)
+    stream.switch(True, None)
+    track = NavTrack()
+    poses: dict[float, np.ndarray] = {}
+    spent: list[float] = []
+    first = True
+    end = time.monotonic() + frames / 10.0 + 5.0
+    delivered = 0
+    while time.monotonic() < end and delivered < frames:
+        got = stream.collect(track, time.monotonic())
+        for frame in got:
+            t0 = time.perf_counter()
+            result = plugin.process(frame, OdometryRequest(set_origin=first))
+            spent.append(time.perf_counter() - t0)
+            first = False
+            if result.ok and result.T_origin_cam is not None:
+                poses[frame.time] = result.T_origin_cam
+        delivered += len(got)
+        if not got:
+            time.sleep(0.005)
+    stream.close()
+    sequence = read_kitti_sequence(args.folder)
+    reference = estimate_trajectory(sequence, method=args.method)
+    index = {round(float(t), 6): i for i, t in enumerate(sequence.times)}
+    errors = [float(np.linalg.norm(T[:3, 3] - reference[index[round(t, 6)]][:3, 3])) for t, T in poses.items()]
+    print(f"replay of {args.folder} ({frames} pairs at its times.txt pace) into stereo-vo ({args.method}), "
+          "in real time")
+    print(f"  pairs delivered {stream.stats.delivered}, dropped {stream.stats.dropped}; VO per pair: median "
+          f"{1000 * np.median(spent):.0f} ms, max {1000 * max(spent):.0f} ms")
+    print(f"  {len(poses)} VO positions; largest distance from auv vo's pose of the same frame: "
+          f"{max(errors):.4f} m")
+
+
 def speedup(args: argparse.Namespace) -> None:
     auv = [sys.executable, "-m", "mission"]
     udp, tcp = free_port(socket.SOCK_DGRAM), free_port()
@@ -150,6 +199,10 @@ def main() -> None:
     p.add_argument("--rate", type=float, default=10.0)
     p.add_argument("--size", default="1200x900")
     p.set_defaults(func=latency)
+    p = sub.add_parser("replay-vo")
+    p.add_argument("folder")
+    p.add_argument("--method", default="adaptive", help="VO method (default adaptive, `auv vo`'s)")
+    p.set_defaults(func=replay_vo)
     p = sub.add_parser("speedup")
     p.add_argument("mission")
     p.add_argument("--speedup", type=float, default=5.0)
