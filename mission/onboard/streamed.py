@@ -67,9 +67,7 @@ class StreamedVehicle:
         self.payload = frozenset(sensors)
         for name, stream in self.streams.items():
             stream.switch(name in sensors, self.rate_hz if name == "stereo" else None)
-        unstreamed = frozenset(s for s in sensors if s not in self.streams)
-        if unstreamed or not sensors:
-            self.vehicle.set_payload(unstreamed)
+        self.vehicle.set_payload(frozenset(s for s in sensors if s not in self.streams))
 
     def set_frame_rate(self, rate_hz: float | None) -> None:
         self.rate_hz = rate_hz
