@@ -182,6 +182,10 @@ def speedup(args: argparse.Namespace) -> None:
         metrics = json.loads((out / "metrics.json").read_text())
     print(f"{args.mission} at --speedup {args.speedup:g}: completed {metrics['completed']}, "
           f"{metrics['mission_time_s']:.0f} s of vehicle time in {metrics['wall_time_s']:.0f} s")
+    for e in metrics["elements"]:
+        if e.get("coverage_percent") is not None:
+            found = ", ".join(f"({d['north']:.2f}, {d['east']:.2f})" for d in e.get("detections", []))
+            print(f"  {e['id']}: coverage {e['coverage_percent']:.2f} %, {e['pings']} pings, detections {found}")
     for name, s in metrics.get("sensors", {}).items():
         print(f"  {name:<8} received {s['received']:>6}  delivered {s['delivered']:>6}  dropped {s['dropped']:>4}  "
               f"stale {s['stale']:>3}  lost {s['lost_events']}  queue latency median {s['queue_latency_median_s']} s")
