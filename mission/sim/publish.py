@@ -80,6 +80,8 @@ class StreamPublisher:
             return
         self._applied = (wanted, rate)
         v = self.vehicle
+        if "mbes" in wanted and "mbes" not in v.payload:  # no burst of the pings "due" while it was off
+            v.next_ping = max(v.next_ping, v.truth.time)
         v.set_payload(wanted)
         v.set_frame_rate(rate)
         self.log("payload_switched", sensors=sorted(wanted), frame_rate_hz=rate)
