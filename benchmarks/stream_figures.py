@@ -188,7 +188,8 @@ def speedup(args: argparse.Namespace) -> None:
             print(f"  {e['id']}: coverage {e['coverage_percent']:.2f} %, {e['pings']} pings, detections {found}")
     for name, s in metrics.get("sensors", {}).items():
         print(f"  {name:<8} received {s['received']:>6}  delivered {s['delivered']:>6}  dropped {s['dropped']:>4}  "
-              f"stale {s['stale']:>3}  lost {s['lost_events']}  queue latency median {s['queue_latency_median_s']} s")
+              f"stale {s['stale']:>3}  ignored (off) {s['ignored_while_off']:>4}  lost {s['lost_events']}  "
+              f"queue latency median {s['queue_latency_median_s']} s")
 
 
 def main() -> None:

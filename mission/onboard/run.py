@@ -161,7 +161,7 @@ def run_onboard(mission: Mission, uri: str, out: str | Path, connect_timeout: fl
         try:
             roles = mission.plugins.model_dump()
             host = PluginHost(roles, plugin_settings(mission), emit) if any(roles.values()) else None
-            agents = guarded_agents(REGISTRY, vehicle.lost) if isinstance(vehicle, StreamedVehicle) else None
+            agents = guarded_agents(REGISTRY, vehicle) if isinstance(vehicle, StreamedVehicle) else None
             executive = Executive(mission, recording, emit, agents=agents, plugins=host, artifacts=Artifacts(out))
             if signals:
                 with stop_on_signals(executive):

@@ -69,6 +69,11 @@ class StreamedVehicle:
             stream.switch(name in sensors, self.rate_hz if name == "stereo" else None)
         self.vehicle.set_payload(frozenset(s for s in sensors if s not in self.streams))
 
+    def streams_off(self) -> None:
+        """Switch every stream off (an element has ended; the executive switches the payload next)."""
+        for stream in self.streams.values():
+            stream.switch(False, None)
+
     def set_frame_rate(self, rate_hz: float | None) -> None:
         self.rate_hz = rate_hz
         stereo = self.streams.get("stereo")
@@ -93,12 +98,14 @@ class StreamedVehicle:
 
 class SensorGuard(Agent):
     """Wraps an agent: when a sensor it has on is lost, the agent fails with `sensor lost: NAME`, and the vehicle
-    is told to hold for that tick. Everything else is the wrapped agent's."""
+    is told to hold for that tick; when the element ends, `ended()` runs before the agent's own `stop` (the streams
+    go off while a survey computes its products). Everything else is the wrapped agent's."""
 
-    def __init__(self, inner: Agent, lost: Callable[[], frozenset[str]]):
+    def __init__(self, inner: Agent, lost: Callable[[], frozenset[str]], ended: Callable[[], None] = lambda: None):
         super().__init__()
         self.inner = inner
         self.lost = lost
+        self.ended = ended
         self.kind = inner.kind  # type: ignore[misc]
         self._sync()
 
@@ -125,14 +132,15 @@ class SensorGuard(Agent):
         return self.inner.planned_path()
 
     def stop(self) -> None:
+        self.ended()  # the element is over: its streams stop before the agent works on its products
         self.inner.stop()
         self._sync()
 
 
-def guarded_agents(factories: Mapping[str, Callable[[], Agent]], lost: Callable[[], frozenset[str]]
+def guarded_agents(factories: Mapping[str, Callable[[], Agent]], vehicle: StreamedVehicle
                    ) -> dict[str, Callable[[], Agent]]:
-    """The agent factories, each agent wrapped in a `SensorGuard`."""
+    """The agent factories, each agent wrapped in a `SensorGuard` of the vehicle's streams."""
     def guarded(factory: Callable[[], Agent]) -> Callable[[], Agent]:
-        return lambda: SensorGuard(factory(), lost)
+        return lambda: SensorGuard(factory(), vehicle.lost, vehicle.streams_off)
 
     return {kind: guarded(factory) for kind, factory in factories.items()}

@@ -36,14 +36,15 @@ class StreamStats:
     received: int = 0
     delivered: int = 0
     dropped: int = 0  # oldest frames dropped by a full queue or a consumer that fell behind
-    stale: int = 0  # frames older than the navigation history, or far ahead of it
+    stale: int = 0  # frames far ahead of the navigation estimate's clock
+    ignored: int = 0  # frames that came while the sensor was off
     lost_events: int = 0
     latency_s: list[float] = field(default_factory=list)  # wall arrival → delivery to the agents
 
     def summary(self) -> dict[str, Any]:
         lat = sorted(self.latency_s)
         return {"received": self.received, "delivered": self.delivered, "dropped": self.dropped,
-                "stale": self.stale, "lost_events": self.lost_events,
+                "stale": self.stale, "ignored_while_off": self.ignored, "lost_events": self.lost_events,
                 "queue_latency_median_s": round(lat[len(lat) // 2], 4) if lat else None}
 
 
@@ -65,9 +66,14 @@ class SensorStream:
         self.driver = opener(uri, DriverContext(sensor, settings, self._take))
 
     def _take(self, frame: SensorFrame) -> None:
-        """The driver's thread: queue the frame (the oldest goes when full) and note when it came."""
+        """The driver's thread: queue the frame (the oldest goes when full) and note when it came; a frame that
+        comes while the sensor is off is ignored (counted)."""
         now = time.monotonic()
         self.last_arrival = now
+        self.stats.received += 1
+        if not self.on:
+            self.stats.ignored += 1
+            return
         self.queue.put((now, frame))
 
     def switch(self, on: bool, rate_hz: float | None) -> None:
@@ -108,6 +114,7 @@ class SensorStream:
         latest = track.latest_time
         for arrived, frame in self.waiting:
             if not self.on:
+                self.stats.ignored += 1
                 continue
             if isinstance(frame, StereoImages):
                 out.append(frame)
@@ -130,7 +137,6 @@ class SensorStream:
         return out
 
     def close(self) -> None:
-        self.stats.received = self.queue.received
         self.stats.dropped += self.queue.dropped
         self.driver.close()
 
