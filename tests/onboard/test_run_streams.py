@@ -1,5 +1,5 @@
 """`auv run` gets its multibeam over Zenoh from `auv sim serve --zenoh` (two processes, MAVLink and Zenoh on
-loopback) and maps a survey as `auv simulate` does; a stream that never comes is a `sensor_lost` within the
+loopback) and maps a survey as `auv simulate` does; a stream killed mid-survey is a `sensor_lost` within the
 sensor's timeout and the survey fails per its `on_failure` while the mission goes on."""
 
 from __future__ import annotations
@@ -18,8 +18,6 @@ import pytest
 pytest.importorskip("mujoco")
 pytest.importorskip("zenoh")
 pytest.importorskip("rosbags")
-
-from mission.sensors.streams import STARTUP_GRACE_S  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 AUV = [sys.executable, "-m", "mission"]
@@ -121,23 +119,6 @@ def test_a_survey_flown_on_zenoh_streams_maps_and_detects_as_the_simulation_does
     mbes = flown["sensors"]["mbes"]
     assert mbes["delivered"] >= 0.9 * survey["pings"] and mbes["lost_events"] == 0
     assert not any(e["event"] == "sensor_lost" for e in events(out))
-
-
-def test_a_stream_that_never_comes_is_lost_within_its_timeout_and_the_mission_goes_on(tmp_path: Path) -> None:
-    mission = write_mission(tmp_path, LAST_LEG)
-    code, output, out = fly(mission, tmp_path, publish=False)
-    assert code == 1, output  # not completed: the survey failed
-    log = events(out)
-    started = next(e for e in log if e["event"] == "element_started" and e["element"] == "survey")
-    lost = [e for e in log if e["event"] == "sensor_lost"]
-    assert len(lost) == 1 and lost[0]["sensor"] == "mbes"
-    # the timeout and the start-up grace of a sensor just switched on (wall s), and a tick
-    assert lost[0]["time"] - started["time"] <= (1.0 + STARTUP_GRACE_S + 0.5) * SPEEDUP
-    metrics = json.loads((out / "metrics.json").read_text())
-    statuses = {e["id"]: (e["status"], e.get("reason", "")) for e in metrics["elements"]}
-    assert statuses["survey"] == ("failed", "sensor lost: mbes")
-    assert statuses["leave"][0] == "succeeded"  # on_failure: continue
-    assert metrics["sensors"]["mbes"]["lost_events"] == 1
 
 
 def test_killing_the_stream_mid_survey_is_sensor_lost_within_the_timeout_and_the_mission_goes_on(

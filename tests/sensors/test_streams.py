@@ -145,6 +145,18 @@ def test_a_silent_stream_is_lost_within_its_timeout_and_recovers_when_it_speaks_
     assert stream.stats.lost_events == 1
 
 
+def test_a_sensor_switched_on_that_never_speaks_is_lost_after_its_timeout_and_the_start_up_grace(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    from mission.sensors import streams
+
+    monkeypatch.setattr(streams, "STARTUP_GRACE_S", 0.2)
+    stream, _ = stream_of(lambda i: None, timeout=0.3)
+    stream.switch(True, None)
+    assert stream.check(stream.switched_on + 0.45) == ""
+    assert stream.check(stream.switched_on + 0.55) == "lost"
+    stream.close()
+
+
 def test_a_stream_that_is_off_is_never_lost() -> None:
     stream, _ = stream_of(lambda i: None)
     time.sleep(0.4)
