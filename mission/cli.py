@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from mission.cli_export import add_export_command, add_mcap_option, write_mcap_if_asked
 from mission.cli_onboard import add_onboard_commands
 from mission.cli_plan import add_plan_commands
 from mission.errors import AuvError, MissionError
@@ -27,9 +28,8 @@ def _validate(args: argparse.Namespace) -> int:
             print(d)
         if args.estimate and mission is not None:
             from mission.cli_plan import print_estimate
-            from mission.estimate import estimate_mission
 
-            print_estimate(estimate_mission(mission), args.json)
+            print_estimate(mission, args.json)
         errors = sum(1 for d in diags if not d.warning)
         warnings = len(diags) - errors
         if errors:
@@ -85,6 +85,7 @@ def _simulate(args: argparse.Namespace) -> int:
     if args.record_stereo:
         pairs = len(result.vehicle.log.frames)
         print(f"stereo stream: {pairs} pair(s) in {out / 'stereo'} (KITTI layout; `auv vo {out / 'stereo'}`)")
+    write_mcap_if_asked(args, out)
     return 0 if m["completed"] else 1
 
 
@@ -259,6 +260,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="each perception plug-in call's latency charged to the simulated clock (default 0.1 s: "
                    "runs repeat exactly for a seed); 'measured': the call's CPU time, so the run depends on the "
                    "machine")
+    add_mcap_option(p)
     p.set_defaults(func=_simulate)
 
     p = sub.add_parser("plot", help="redraw a run folder's figures from its files")
@@ -306,6 +308,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_model_build)
     add_onboard_commands(sub)
     add_plan_commands(sub)
+    add_export_command(sub)
     return parser
 
 

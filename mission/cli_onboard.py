@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from mission.cli_export import add_mcap_option, write_mcap_if_asked
 from mission.errors import Diagnostic, MissionError
 
 
@@ -36,6 +37,7 @@ def _run(args: argparse.Namespace) -> int:
         extra = f" ({e['reason']})" if e.get("reason") else ""
         print(f"  {e['id']:<24} {e['kind']:<9} {e['status']:<10} {e['duration_s']:8.1f} s{extra}")
     print(f"run folder: {out}")
+    write_mcap_if_asked(args, out)
     return 0 if m["completed"] else 1
 
 
@@ -146,6 +148,7 @@ def add_onboard_commands(sub: Any) -> None:
     p.add_argument("--sensor-driver", action="append", metavar="[SENSOR=]URI",
                    help="payload stream driver for SENSOR (mbes, stereo, scanner), or for every sensor the mission "
                    "has, overriding the mission's `driver:`; e.g. zenoh:auv/sim?connect=tcp/127.0.0.1:7447")
+    add_mcap_option(p)
     p.set_defaults(func=_run)
 
     p = sub.add_parser("vehicles", help="list installed vehicle adapters (entry-point group auv.vehicles)")

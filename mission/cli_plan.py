@@ -7,17 +7,39 @@ import argparse
 import json
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mission.errors import MissionError
-from mission.estimate import MissionEstimate, estimate_mission
-from mission.language.models import Mission
+
+if TYPE_CHECKING:
+    from mission.estimate import MissionEstimate
+    from mission.language.models import Mission
 
 
-def print_estimate(estimate: MissionEstimate, as_json: bool, out: Any = None) -> None:
+def mission_estimate(mission: Mission) -> tuple[MissionEstimate, list[tuple[str, str]]]:
+    """The estimate of the route as the strategic level plans it before the dive, and the work it drops."""
+    from mission.estimate import RouteEstimator, estimate_mission
+    from mission.strategy import Budget, plan_route
+
+    chart = None
+    if mission.world is not None:
+        from mission.world.chart import chart_of
+
+        chart = chart_of(mission.world)
+    estimator = RouteEstimator(mission, chart)
+    home = mission.home
+    plan = plan_route(mission, mission.route, Budget(home.north, home.east, home.depth), estimator)
+    return estimate_mission(mission, plan.order, estimator), [(e.id, why) for e, why in plan.dropped]
+
+
+def print_estimate(mission: Mission, as_json: bool, out: Any = None) -> None:
     out = out or sys.stdout
+    estimate, dropped = mission_estimate(mission)
     if as_json:
-        print(json.dumps(estimate.as_json(), indent=1), file=out)
+        data = estimate.as_json()
+        data["order"] = [e.id for e in estimate.elements]
+        data["dropped"] = [{"element": ident, "reason": why} for ident, why in dropped]
+        print(json.dumps(data, indent=1), file=out)
         return
     print(f"  {'element':<24} {'kind':<9} {'distance':>10} {'duration':>10} {'energy':>9}  basis", file=out)
     for e in estimate.elements:
@@ -26,6 +48,11 @@ def print_estimate(estimate: MissionEstimate, as_json: bool, out: Any = None) ->
               f"  {e.basis}{cover}", file=out)
     print(f"  {'total':<34} {estimate.distance_m:8.0f} m {estimate.duration_s / 60:6.1f} min "
           f"{estimate.energy_wh:6.1f} Wh", file=out)
+    listed = [e.id for e in mission.route if all(e.id != d for d, _ in dropped)]
+    if [e.id for e in estimate.elements] != listed:
+        print(f"  order: {', '.join(e.id for e in estimate.elements)} (the strategic level's)", file=out)
+    for ident, why in dropped:
+        print(f"  dropped: {ident} ({why})", file=out)
     for warning in estimate.warnings:
         print(f"  warning: {warning}", file=out)
 
@@ -38,12 +65,11 @@ def _plan(args: argparse.Namespace) -> int:
         raise MissionError([d for d in diags if not d.warning])
     for d in diags:
         print(d, file=sys.stderr)
-    estimate = estimate_mission(mission)
     if not args.json:
         print(f"{mission.name}: estimate before the dive")
-    print_estimate(estimate, args.json)
+    print_estimate(mission, args.json)
     if args.figure:
-        plot_plan(mission, estimate, Path(args.figure))
+        plot_plan(mission, mission_estimate(mission)[0], Path(args.figure))
         print(f"figure: {args.figure}", file=sys.stderr if args.json else sys.stdout)
     return 0
 

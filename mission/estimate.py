@@ -14,17 +14,18 @@ The estimate walks the route from the home position, element by element, keeping
   field says which figures come from a plan and which from a budget.
 
 Energy is the vehicle model's (`mission.sim.vehicle`): hotel power all the time, propulsion power times the cube
-of speed over cruise speed while moving. The seabed and the current come from the mission's world (a chart of the
-site), when it names one.
+of speed over cruise speed while moving. The seabed and the current come from a `Chart` of the site when one is
+given (`auv plan` charts the mission's world).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from mission.language.models import Explore, Inspect, Mission, Reference, RouteElement, Survey, Transit
+from mission.language.models import Explore, Inspect, Mission, Pose, Reference, RouteElement, Survey, Transit
 from mission.vehicle import STATION_KEEPING_SPEED_M_S
 
 DEPTH_GAIN = 0.4  # (m/s) per m: the autopilot's depth loop (`mission.sim.kinematics`)
@@ -85,34 +86,60 @@ class _Where:
     depth: float
 
 
+@dataclass
+class Chart:
+    """What is known of the site before the dive: the seabed depth (`depth_at(north, east)`, metres) and the water
+    current (north, east, m/s). `auv plan` charts the mission's world (`mission.world.chart`); the executive has
+    none, and then altitudes keep the depth the vehicle has."""
+
+    depth_at: Callable[[float, float], float] | None = None
+    current: tuple[float, float] = (0.0, 0.0)
+
+
 class _Site:
-    """What a designer knows of the site: the seabed depth (charted, objects left out) and the current."""
+    """The chart, and the survey plans made so far (a plan depends on where the survey begins only through its
+    first line)."""
 
-    def __init__(self, mission: Mission):
-        self.seabed: Any = None
-        self.current = (0.0, 0.0)
-        if mission.world is not None:
-            from mission.language.loader import load_world
-            from mission.world.scene import build_scene
-
-            scene = build_scene(load_world(mission.world))
-            self.seabed, self.current = scene.seabed, scene.current
+    def __init__(self, chart: Chart | None):
+        chart = chart or Chart()
+        self.plans: dict[str, Any] = {}
+        self.seabed_depth = chart.depth_at
+        self.current = chart.current
 
     def depth_at_altitude(self, north: float, east: float, altitude: float) -> float | None:
-        if self.seabed is None:
+        if self.seabed_depth is None:
             return None
-        return max(float(self.seabed.depth_at(north, east)) - altitude, 0.0)
+        return max(float(self.seabed_depth(north, east)) - altitude, 0.0)
 
 
-def estimate_mission(mission: Mission) -> MissionEstimate:
-    """The estimate of every route element, in order, and warnings against `max_duration` and the energy
-    reserve."""
-    site = _Site(mission)
-    here = _Where(mission.home.north, mission.home.east, mission.home.depth)
-    out: list[ElementEstimate] = []
-    for element in mission.route:
-        out.append(_element(mission, site, element, here))
-    estimate = MissionEstimate(out)
+class RouteEstimator:
+    """Estimates of route elements flown in a given order from a given position (the strategic level re-plans
+    with it; `estimate_mission` gives the whole route's)."""
+
+    def __init__(self, mission: Mission, chart: Chart | None = None):
+        self.mission = mission
+        self.site = _Site(chart)
+
+    def route(self, elements: Sequence[RouteElement], north: float, east: float,
+              depth: float) -> list[ElementEstimate]:
+        here = _Where(north, east, depth)
+        return [_element(self.mission, self.site, element, here) for element in elements]
+
+    def end_of(self, element: RouteElement, north: float, east: float, depth: float) -> tuple[float, float, float]:
+        """Where the vehicle will be after `element`, begun at (north, east, depth)."""
+        here = _Where(north, east, depth)
+        _element(self.mission, self.site, element, here)
+        return here.north, here.east, here.depth
+
+
+def estimate_mission(mission: Mission, route: Sequence[RouteElement] | None = None,
+                     estimator: RouteEstimator | None = None, chart: Chart | None = None) -> MissionEstimate:
+    """The estimate of every element of `route` (default: the mission's, as listed) from the home position, and
+    warnings against `max_duration` and the energy reserve."""
+    home = mission.home
+    estimator = estimator or RouteEstimator(mission, chart)
+    estimate = MissionEstimate(estimator.route(mission.route if route is None else route,
+                                               home.north, home.east, home.depth))
     safety = mission.safety
     if estimate.duration_s > safety.max_duration:
         estimate.warnings.append(f"the estimated duration {estimate.duration_s / 60:.0f} min exceeds max_duration "
@@ -137,13 +164,13 @@ def _element(mission: Mission, site: _Site, element: RouteElement, here: _Where)
     if isinstance(p, Explore):
         return _adaptive(mission, element, here, p.budget)
     if isinstance(p, Inspect):
-        targets = mission.object(p.object).targets
-        count = len(targets) if p.targets == "all" else len(p.targets)
-        return _adaptive(mission, element, here, 0.5 * p.search.budget + count * TARGET_WORK_S)
+        obj = mission.object(p.object)
+        count = len(obj.targets) if p.targets == "all" else len(p.targets)
+        return _adaptive(mission, element, here, 0.5 * p.search.budget + count * TARGET_WORK_S, obj.pose)
     assert isinstance(p, Reference)
-    sets = mission.object(p.object).characteristic_points
-    count = len(sets) if p.point_sets == "all" else len(p.point_sets)
-    return _adaptive(mission, element, here, count * 2.0 * len(p.offsets) + REFERENCE_FINE_S)
+    obj = mission.object(p.object)
+    count = len(obj.characteristic_points) if p.point_sets == "all" else len(p.point_sets)
+    return _adaptive(mission, element, here, count * 2.0 * len(p.offsets) + REFERENCE_FINE_S, obj.pose)
 
 
 def _energy(mission: Mission, duration_s: float, moving_s: float, speed: float) -> float:
@@ -219,9 +246,11 @@ def _survey(mission: Mission, site: _Site, ident: str, p: Survey, here: _Where) 
     mbes = mission.sensors.mbes
     if mbes is None:
         return ElementEstimate(ident, "survey", 0.0, 0.0, 0.0, "plan")
-    spacing = line_spacing(p.altitude, mbes.swath_deg, p.overlap)
-    plan = meander(p.area, p.exclude, spacing=spacing, heading=p.heading, turn_radius=mission.vehicle.turn_radius,
-                   start=(here.north, here.east))
+    plan = site.plans.get(ident)
+    if plan is None:
+        spacing = line_spacing(p.altitude, mbes.swath_deg, p.overlap)
+        plan = site.plans[ident] = meander(p.area, p.exclude, spacing=spacing, heading=p.heading,
+                                           turn_radius=mission.vehicle.turn_radius, start=(here.north, here.east))
     speed = p.speed or mission.vehicle.cruise_speed
     first = plan.waypoints[0]
     approach = math.hypot(first[0] - here.north, first[1] - here.east)
@@ -239,12 +268,28 @@ def _survey(mission: Mission, site: _Site, ident: str, p: Survey, here: _Where) 
                            round(cover, 2), path)
 
 
-def _adaptive(mission: Mission, element: RouteElement, here: _Where, budget_s: float) -> ElementEstimate:
-    duration = float(budget_s if element.timeout is None else min(budget_s, element.timeout))
-    moving = WORK_FRACTION_MOVING * duration
+def _adaptive(mission: Mission, element: RouteElement, here: _Where, budget_s: float,
+              at: Pose | None = None) -> ElementEstimate:
+    """An adaptive element: its work from its budget, and for a known object the way there first (at the work
+    speed: the agent approaches at it)."""
+    from mission.agents.hover import WORK_SPEED_M_S  # (the agents package is heavy: imported only here)
+
+    work = float(budget_s)
+    approach = 0.0
+    path: tuple[tuple[float, float], ...] = ()
+    if at is not None:
+        approach = math.hypot(at.north - here.north, at.east - here.east)
+        path = ((here.north, here.east), (at.north, at.east))
+        here.north, here.east = at.north, at.east
+    approach_s = approach / WORK_SPEED_M_S
+    duration = approach_s + work
+    if element.timeout is not None:
+        duration = min(duration, element.timeout)
+    moving = WORK_FRACTION_MOVING * work
     speed = STATION_KEEPING_SPEED_M_S
-    return ElementEstimate(element.id, element.kind, moving * speed, duration,
-                           _energy(mission, duration, moving, speed), "budget")
+    energy = _energy(mission, duration, moving, speed) + _energy(mission, 0.0, approach_s, WORK_SPEED_M_S)
+    return ElementEstimate(element.id, element.kind, approach + moving * speed, duration, energy, "budget",
+                           path=path)
 
 
 def coverage_of(estimate: MissionEstimate) -> dict[str, float]:
@@ -252,4 +297,5 @@ def coverage_of(estimate: MissionEstimate) -> dict[str, float]:
     return {e.id: e.coverage_percent for e in estimate.elements if e.coverage_percent is not None}
 
 
-__all__ = ["ElementEstimate", "MissionEstimate", "estimate_mission", "leg_time", "vertical_time"]
+__all__ = ["Chart", "ElementEstimate", "MissionEstimate", "RouteEstimator", "estimate_mission", "leg_time",
+           "vertical_time"]
