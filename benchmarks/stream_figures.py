@@ -14,6 +14,10 @@ control tick), and the frames dropped.
 real time; prints the pairs delivered and dropped, the VO time per pair, and how far the poses are from
 `auv vo`'s for the same folder.
 
+`photos RUN_DIR TRUTH_DIR MISSION`: scores an onboard inspection's photographs against the truth `auv sim serve
+--out` kept, as `auv simulate` scores them (`mission.sim.inspect_metrics`): the true camera error against the
+planned viewpoint, and whether the target is in the picture.
+
 `speedup`: flies MISSION with `auv run` (zenoh driver) against `auv sim serve --zenoh --speedup K` and prints each
 stream's received / delivered / dropped frames from the run's metrics.json.
 """
@@ -192,6 +196,41 @@ def speedup(args: argparse.Namespace) -> None:
               f"queue latency median {s['queue_latency_median_s']} s")
 
 
+def photos(args: argparse.Namespace) -> None:
+    import csv
+
+    from mission.agents.report import Photo
+    from mission.frames import camera_pose
+    from mission.language.loader import load_mission, load_world
+    from mission.sim.inspect_metrics import _photo_truth
+    from mission.world.scene import build_scene
+
+    mission = load_mission(args.mission)
+    assert mission.world is not None and mission.sensors.stereo is not None
+    scene = build_scene(load_world(mission.world))
+    rows = list(csv.DictReader(open(Path(args.truth) / "trajectory.csv", encoding="utf-8")))
+    times = np.array([float(r["time"]) for r in rows])
+    metrics = json.loads((Path(args.run) / "metrics.json").read_text())
+    stereo = mission.sensors.stereo
+    for item in (e for e in metrics["elements"] if e["kind"] == "inspect"):
+        truth = next(o for o in scene.objects if o.database == item["object"])
+        at = {t.id: np.asarray(t.at, float) for t in mission.object(item["object"]).targets}
+        shots: dict[str, list[dict[str, object]]] = {}
+        for p in item["photos"]:
+            r = rows[int(np.argmin(abs(times - p["time"])))]
+            T_world_cam = camera_pose(float(r["north"]), float(r["east"]), float(r["depth"]), float(r["heading"]),
+                                      baseline=stereo.baseline)
+            photo = Photo(p["target"], p["index"], p["time"], p["file"], p["viewpoint_object"], p["T_object_cam_est"],
+                          p["camera_error_est_m"], p["altitude_limited"], p["odometry_path_m"])
+            shots.setdefault(p["target"], []).append(_photo_truth(photo, T_world_cam, truth.T_world_object,
+                                                                  at[p["target"]], stereo))
+        print(f"{item['id']}: {len(item['photos'])} photos of {len(shots)} targets ({len(at)} planned)")
+        for tid, results in shots.items():
+            worst = max(float(str(x["camera_error_m"])) for x in results)
+            print(f"  {tid:<16} {len(results)} photos; true camera error max {worst:.3f} m; target in every photo: "
+                  f"{all(bool(x['target_in_image']) for x in results)}")
+
+
 def main() -> None:
     if len(sys.argv) > 1 and sys.argv[1] == "_publish":
         port, seconds, rate, width, height = sys.argv[2:7]
@@ -208,6 +247,11 @@ def main() -> None:
     p.add_argument("folder")
     p.add_argument("--method", default="adaptive", help="VO method (default adaptive, `auv vo`'s)")
     p.set_defaults(func=replay_vo)
+    p = sub.add_parser("photos")
+    p.add_argument("run")
+    p.add_argument("truth")
+    p.add_argument("mission")
+    p.set_defaults(func=photos)
     p = sub.add_parser("speedup")
     p.add_argument("mission")
     p.add_argument("--speedup", type=float, default=5.0)
