@@ -15,6 +15,7 @@ from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationInfo, 
 
 from mission import geodesy
 from mission.language import limits as L
+from mission.language.streamed import Streamed
 from mission.language.units import Duration, Percent
 
 
@@ -117,15 +118,6 @@ class VehicleSettings(Strict):
 
 
 Vehicle = VehicleSettings  # the same model under its short name (`Mission.vehicle`)
-
-
-class Streamed(Strict):
-    """A payload sensor's stream onboard: `driver` is an `auv.sensors` URI (`zenoh:auv/sim`, `replay:DIR`,
-    `camera:0,1?calibration=FILE`; `auv run` only, the simulator ignores it); a stream silent for `timeout` while
-    the sensor is on is lost."""
-
-    driver: str | None = None
-    timeout: Duration = 2.0
 
 
 class Mbes(Streamed):
