@@ -27,6 +27,7 @@ from perception_plugins.stereo import RectifiedStereo
 from perception_plugins.vo.features import lk, stereo_features, stereo_match
 from perception_plugins.vo.frontend import Array, Step, geometry_of, grey
 from perception_plugins.vo.motion import estimate_motion
+from perception_plugins.vo.window import KeyFeatures, Matches
 
 OFFSET_DEPTH_RATIO = 2.5
 """A fragment estimates the disparity offset only when its points' depths span this ratio (90th over 10th
@@ -73,6 +74,8 @@ class KltTracker:
         """The disparity offset in use: the median of `offsets` once there are three."""
         self.key_points: Array = np.zeros((0, 3))
         self._key_uv: Array = np.zeros((0, 2))
+        self._key_uv_right: Array = np.zeros((0, 2))
+        self._matches: Matches | None = None
         self._key_image: NDArray[np.uint8] | None = None
         self._last_image: NDArray[np.uint8] | None = None
         self._last_uv: Array = np.zeros((0, 2))
@@ -91,7 +94,7 @@ class KltTracker:
         self._key_doffs = self.doffs
         if len(feats):
             self._disparity = float(np.median(feats.uv_left[:, 0] - feats.uv_right[:, 0]))
-        self.key_points, self._key_uv = feats.points_cam, feats.uv_left
+        self.key_points, self._key_uv, self._key_uv_right = feats.points_cam, feats.uv_left, feats.uv_right
         self._key_image = self._last_image = self._for_tracking(left)
         self._last_uv = feats.uv_left.copy()
         self._alive = np.ones(len(feats), dtype=bool)
@@ -116,8 +119,15 @@ class KltTracker:
         return Step(motion.T_a_b, motion.count, {"index": idx[motion.inliers], "uv": uv[motion.inliers],
                                                  "left": left, "tracked": tracked})
 
+    def key_features(self) -> KeyFeatures:
+        return KeyFeatures(self._key_uv, self._key_uv_right, self.key_points)
+
+    def key_matches(self) -> Matches | None:
+        return self._matches
+
     def commit(self, frame: StereoImages, step: Step, end: bool) -> Array:
         idx, uv, left = step.data["index"], step.data["uv"], step.data["left"]
+        self._matches = None
         self._alive[:] = False
         self._alive[idx] = True
         self._last_uv[idx] = uv
@@ -139,6 +149,8 @@ class KltTracker:
         motion = estimate_motion(self.key_points[idx], uv, frame.K, uv_b_right=uv_r, right_ok=right_ok,
                                  baseline=frame.baseline, T_a_b_guess=step.T_key_b, threshold_px=self.threshold_px,
                                  doffs=geometry.doffs, estimate_offset=calibrate)
+        uv_r = np.where(right_ok[:, None], uv_r, np.nan)
+        self._matches = Matches(idx, uv, uv_r)
         if motion is None:
             return step.T_key_b
         # The refinement must stay near the tracked estimate, and the offset correction small: on noise (a
@@ -146,6 +158,8 @@ class KltTracker:
         moved = float(np.linalg.norm(motion.T_a_b[:3, 3] - step.T_key_b[:3, 3]))
         if abs(motion.disparity_offset) > 1.0 or moved > 0.2 * float(np.linalg.norm(step.T_key_b[:3, 3])) + 0.01:
             return step.T_key_b
+        keep = motion.inliers
+        self._matches = Matches(idx[keep], uv[keep], uv_r[keep])
         if calibrate:
             self.offsets.append(self._key_doffs + motion.disparity_offset)
             if len(self.offsets) >= 3:
