@@ -12,8 +12,8 @@ one point (analytic blocks; ∂p/∂φ = −[R·X]ₓ·J_l(φ), J_l the left Jac
 robust Huber loss (iteratively reweighted, `huber_px`) solves the normal equations with the points eliminated (the
 Schur complement on the poses). scipy's sparse `least_squares` (trust-region reflective with LSMR) was measured on
 the same problems first: 1121 points and 8 keyframes, with Huber and `x_scale='jac'` it left the poses where they
-started after 30 evaluations, and without the robust loss it took 28 s; this solver reaches 0.003 m in 0.1 s. Stereo fixes the scale, so one fixed keyframe fixes the
-gauge.
+started after 30 evaluations, and without the robust loss it took 28 s; this solver brings the poses from 0.1 m to
+0.003 m in 0.13 s (one core). Stereo fixes the scale, so one fixed keyframe fixes the gauge.
 """
 
 from __future__ import annotations
@@ -100,8 +100,8 @@ class _Problem:
         phi = np.zeros((self.P, 3))
         t = self.t0.copy()
         phi[self.fixed:], t[self.fixed:] = pose[:, :3], pose[:, 3:]
-        R = Rotation.from_rotvec(phi).as_matrix() @ self.R0
-        return phi, R, t, x[6 * self.free:].reshape(-1, 3)
+        R = np.asarray(Rotation.from_rotvec(phi).as_matrix() @ self.R0, dtype=np.float64)
+        return phi, R, t, np.asarray(x[6 * self.free:], dtype=np.float64).reshape(-1, 3)
 
     def x0(self, points: Array) -> Array:
         return np.concatenate([np.column_stack([np.zeros((self.free, 3)), self.t0[self.fixed:]]).ravel(),
@@ -122,7 +122,7 @@ class _Problem:
         shift[M:] = self.b
         u = fx * (p[:, 0] - shift) / z + cx + np.where(shift > 0, self.doffs, 0.0)
         v = fy * p[:, 1] / z + cy
-        return np.column_stack([u, v]).ravel() - self.meas
+        return np.asarray(np.column_stack([u, v]).ravel() - self.meas, dtype=np.float64)
 
     def blocks(self, x: Array) -> tuple[Array, Array]:
         """The Jacobian's blocks per residual pair: ∂r/∂pose (n, 2, 6; zero for fixed keyframes), ∂r/∂X (n, 2, 3)."""
@@ -145,7 +145,7 @@ class _Problem:
         e = np.linalg.norm(r.reshape(-1, 2), axis=1)
         out = e[:M].copy()
         out[self.right] = np.maximum(out[self.right], e[M:])
-        return out
+        return np.asarray(out, dtype=np.float64)
 
 
 def _huber_weights(r: Array, c: float) -> tuple[Array, float]:
@@ -178,8 +178,8 @@ def _levenberg_marquardt(problem: _Problem, x0: Array, huber_px: float, iteratio
         A, B = problem.blocks(x)
         wr = (w * r).reshape(-1, 2)
         wA = A * w.reshape(-1, 2)[:, :, None]
-        AtA, BtB = np.matmul(wA.transpose(0, 2, 1), A), np.matmul((B * w.reshape(-1, 2)[:, :, None]).transpose(0, 2, 1), B)
-        AtB = np.matmul(wA.transpose(0, 2, 1), B)
+        wB = B * w.reshape(-1, 2)[:, :, None]
+        AtA, BtB, AtB = (np.matmul(a.transpose(0, 2, 1), c) for a, c in ((wA, A), (wB, B), (wA, B)))
         U = _sum_blocks(k, AtA, F)
         V = _sum_blocks(j, BtB, L)
         Wd = _sum_blocks(k * L + j, AtB, F * L).reshape(F, L, 6, 3).transpose(0, 2, 1, 3)
@@ -238,8 +238,9 @@ def bundle_adjust(T_world_cam: Array, points: Array, obs: Observations, K: Array
     T_cam_world = np.tile(np.eye(4), (P, 1, 1))
     T_cam_world[:, :3, :3], T_cam_world[:, :3, 3] = R, t
     r = problem.residuals(x)
-    return Adjusted(np.linalg.inv(T_cam_world), X.copy(), rms0, float(np.sqrt(np.mean(r**2))),
-                    problem.per_observation_error(r), evaluations)
+    T_world_cam = np.asarray(np.linalg.inv(T_cam_world), dtype=np.float64)
+    return Adjusted(T_world_cam, X.copy(), rms0, float(np.sqrt(np.mean(r**2))), problem.per_observation_error(r),
+                    evaluations)
 
 
 __all__ = ["Adjusted", "BundleError", "Observations", "bundle_adjust"]

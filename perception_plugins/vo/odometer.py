@@ -316,8 +316,8 @@ class Odometer:
         if not linked:
             self.window.reset()
         doffs = geometry_of(frame).doffs + float(getattr(self.frontend, "doffs", 0.0))
-        return self.window.add(T_origin_b, self.frontend.key_features(), self.frontend.key_matches() if linked else None,
-                               frame.K, frame.baseline, doffs, None)
+        matches = self.frontend.key_matches() if linked else None
+        return self.window.add(T_origin_b, self.frontend.key_features(), matches, frame.K, frame.baseline, doffs)
 
     def _dt(self, last: _Position, index: int, frame: StereoImages) -> float:
         if frame.time > last.time:

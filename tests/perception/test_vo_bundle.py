@@ -55,7 +55,7 @@ def _scene(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, Observatio
 
 
 def _position_errors(estimated: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    return np.linalg.norm(estimated[:, :3, 3] - truth[:, :3, 3], axis=1)
+    return np.asarray(np.linalg.norm(estimated[:, :3, 3] - truth[:, :3, 3], axis=1))
 
 
 def test_bundle_adjustment_recovers_the_poses_of_a_turn_from_noisy_pixels_and_perturbed_poses() -> None:
