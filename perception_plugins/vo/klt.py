@@ -23,8 +23,8 @@ from numpy.typing import NDArray
 
 from mission.geometry import invert, transform_points
 from mission.plugin_api import StereoImages
-from perception_plugins.stereo import RectifiedStereo
-from perception_plugins.vo.features import lk, stereo_features, stereo_match
+from perception_plugins.stereo import RectifiedStereo, triangulate
+from perception_plugins.vo.features import StereoFeatures, lk, stereo_features, stereo_match
 from perception_plugins.vo.frontend import Array, Step, geometry_of, grey
 from perception_plugins.vo.motion import estimate_motion
 from perception_plugins.vo.window import KeyFeatures, Matches
@@ -63,10 +63,15 @@ class KltTracker:
 
     def __init__(self, features: int = 500, threshold_px: float = 1.5, back_tol: float = 1.0,
                  max_depth: float | None = None, calibrate_offset: bool = True,
-                 offset_depth_ratio: float = OFFSET_DEPTH_RATIO, track_blur_px: float = 0.0) -> None:
+                 offset_depth_ratio: float = OFFSET_DEPTH_RATIO, track_blur_px: float = 0.0,
+                 carry: bool = False) -> None:
         self.features, self.threshold_px, self.back_tol, self.max_depth = features, threshold_px, back_tol, max_depth
         self.calibrate_offset, self.offset_depth_ratio = calibrate_offset, offset_depth_ratio
         self.track_blur_px = track_blur_px
+        self.carry = carry
+        """A fragment's start keeps the previous fragment's survivors (seen in both end images) as features at
+        their tracked pixels, and detects new corners only away from them (`start`)."""
+        self._carried: tuple[int, Array, Array] | None = None  # (id of the end frame, left pixels, right pixels)
         """σ (px) of the Gaussian applied to the images LK tracks across time (not to the stereo matching)."""
         self.offsets: list[float] = []
         """Disparity offsets (px) estimated at fragment ends (absolute: the offset in use plus the correction)."""
@@ -89,8 +94,21 @@ class KltTracker:
 
     def start(self, frame: StereoImages, mask: NDArray[np.uint8] | None = None) -> int:
         left, right = grey(frame.left), grey(frame.right)
-        feats = stereo_features(left, right, self._geometry(frame), self.features, mask, self._disparity,
-                                self.max_depth)
+        geometry = self._geometry(frame)
+        carried, self._carried = self._carried if self._carried and self._carried[0] == id(frame) else None, None
+        if carried is not None:
+            # Continue the survivors' tracks: their end pixels become key features; new corners fill the rest.
+            kept = triangulate(geometry, carried[1], carried[2])
+            free = np.full(left.shape[:2], 255, np.uint8) if mask is None else mask.copy()
+            for u, v in kept.uv_left:
+                cv2.circle(free, (int(round(u)), int(round(v))), 7, 0, -1)
+            new = stereo_features(left, right, geometry, max(self.features - len(kept), 0), free, self._disparity,
+                                  self.max_depth)
+            feats = StereoFeatures(np.concatenate([kept.uv_left, new.uv_left]),
+                                   np.concatenate([kept.uv_right, new.uv_right]),
+                                   np.concatenate([kept.points_cam, new.points_cam]))
+        else:
+            feats = stereo_features(left, right, geometry, self.features, mask, self._disparity, self.max_depth)
         self._key_doffs = self.doffs
         if len(feats):
             self._disparity = float(np.median(feats.uv_left[:, 0] - feats.uv_right[:, 0]))
@@ -160,6 +178,9 @@ class KltTracker:
             return step.T_key_b
         keep = motion.inliers
         self._matches = Matches(idx[keep], uv[keep], uv_r[keep])
+        both = keep[right_ok[keep]]
+        if self.carry:
+            self._carried = (id(frame), uv[both], uv_r[both])
         if calibrate:
             self.offsets.append(self._key_doffs + motion.disparity_offset)
             if len(self.offsets) >= 3:

@@ -94,6 +94,8 @@ class OdometerSettings:
     classic 100/66/66/85 → 66/54/47/63 cm; degraded mud run tracking losses KLT 16 → 1.8 %, adaptive 32 → 0 %.
     Stronger is not better on sharp real images (σ 1.0: KITTI 1.14 %). None: no low-pass."""
     bundle_window: int | None = 8
+    carry_tracks: bool = True
+    """KLT: a fragment's start continues the previous fragment's survivors as features (`KltTracker.carry`)."""
     """Keyframes (fragment ends) in the local bundle adjustment (`window.KeyframeWindow`); None: no adjustment."""
     tracking_lowpass_px: float | None = 1.5
     """KLT: the images LK tracks across time (step to step, and back to the fragment's start) are low-passed to
@@ -147,7 +149,8 @@ class Odometer:
         if s.step < 1 or s.max_step < 1 or s.fragment_steps < 1:
             raise VoError("step, max_step and fragment_steps must be at least 1")
         self.frontend: Frontend = (KltTracker(s.features, s.threshold_px, calibrate_offset=s.calibrate_offset,
-                                              track_blur_px=_extra_blur(s.tracking_lowpass_px, s.prefilter_px))
+                                              track_blur_px=_extra_blur(s.tracking_lowpass_px, s.prefilter_px),
+                                              carry=s.carry_tracks)
                                    if s.frontend == "klt"
                                    else ClassicMatcher(2 * s.features, s.threshold_px))
         self.network = ReferenceNetwork(s.network) if s.network is not None else None
