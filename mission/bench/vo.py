@@ -46,7 +46,7 @@ import numpy as np
 from mission.bench import REPO, check
 from mission.bench.vo_rendered import network, robustness, table1
 from mission.bench.vo_runs import EFFECTIVE_STEPS, lockstep, relative, summarise, table1_specs
-from mission.bench.vo_turns import BEFORE, turns
+from mission.bench.vo_turns import BEFORE, BUNDLE, turns
 
 KITTI = REPO.parent / "shared" / "data" / "kitti06_0-50"
 def _kitti(quick: bool) -> dict[str, Any]:
@@ -64,11 +64,13 @@ def _kitti(quick: bool) -> dict[str, Any]:
     gt = relative(seq.gt_poses)
     fps = float(1.0 / np.median(np.diff(seq.times)))
     specs: dict[str, tuple[str, dict[str, Any]]] = {"klt": ("klt", {}), "network": ("network", {}),
-                                                     "klt_before": ("klt", BEFORE)}
+                                                     "klt_before": ("klt", BEFORE), "klt_ba": ("klt", BUNDLE)}
     if not quick:
-        specs.update(network_before=("network", BEFORE), adaptive_before=("adaptive", {"fps": fps, "max_step": 64,
-                                                                                       **BEFORE}),
-                     classic=("classic", {}), classic_before=("classic", BEFORE))
+        adaptive = {"fps": fps, "max_step": 64}
+        specs.update(network_before=("network", BEFORE), network_ba=("network", BUNDLE),
+                     adaptive_before=("adaptive", {**adaptive, **BEFORE}),
+                     adaptive_ba=("adaptive", {**adaptive, **BUNDLE}), classic=("classic", {}),
+                     classic_before=("classic", BEFORE), classic_ba=("classic", BUNDLE))
     # --quick keeps the checked method and the other two; the side-by-side table (eight more runs, the classic
     # ones at full resolution the slowest) only in the full run.
     specs.update({"adaptive": table1_specs(fps)["adaptive"]} if quick else table1_specs(fps))

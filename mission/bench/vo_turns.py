@@ -115,13 +115,19 @@ BEFORE: dict[str, Any] = {"bundle_window": None, "carry_tracks": False}
 """The seed's odometer: no bundle adjustment, every KLT fragment starts from fresh corners."""
 
 
+BUNDLE: dict[str, Any] = {"bundle_window": 8}
+"""The defaults with the local bundle adjustment over 8 keyframes."""
+
+
 def specs_before_after(fps: float, methods: tuple[str, ...] = METHODS) -> dict[str, tuple[str, dict[str, Any]]]:
-    """Each method as the seed had it (`_before`: `BEFORE`) and as it is now (its defaults)."""
+    """Each method as the seed had it (`_before`: `BEFORE`), as it is now (its defaults) and with the bundle
+    adjustment (`_ba`: `BUNDLE`)."""
     specs: dict[str, tuple[str, dict[str, Any]]] = {}
     for m in methods:
         extra: dict[str, Any] = {"fps": fps, "max_step": 64} if m == "adaptive" else {}
         specs[f"{m}_before"] = (m, {**extra, **BEFORE})
         specs[m] = (m, extra)
+        specs[f"{m}_ba"] = (m, {**extra, **BUNDLE})
     return specs
 
 
@@ -154,4 +160,5 @@ def turns(quick: bool) -> dict[str, Any]:
     return out
 
 
-__all__ = ["BEFORE", "METHODS", "SEQUENCES", "Turning", "heading_profile", "run_sequence", "sequence_folder", "turns"]
+__all__ = ["BEFORE", "BUNDLE", "METHODS", "SEQUENCES", "Turning", "heading_profile", "run_sequence", "sequence_folder",
+           "turns"]
