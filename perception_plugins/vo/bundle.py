@@ -26,12 +26,12 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from mission.errors import AuvError
+from perception_plugins.vo.errors import VoError
 
 Array = NDArray[np.float64]
 
 
-class BundleError(AuvError):
+class BundleError(VoError):
     """Inconsistent bundle-adjustment input."""
 
 
