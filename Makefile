@@ -9,7 +9,7 @@ STAMP  := $(VENV)/.installed
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[dev,sim,plots]"
+	$(BIN)/python -m pip install --quiet -e ".[dev,sim,plots,interop]"
 	touch $(STAMP)
 
 demo: $(STAMP)
@@ -17,7 +17,7 @@ demo: $(STAMP)
 	$(BIN)/auv simulate missions/field_survey.yaml --out runs/demo
 
 test: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m pytest -n auto --dist worksteal
+	MPLBACKEND=Agg $(BIN)/python -m pytest -n auto --dist worksteal --durations=20
 
 lint: $(STAMP)
 	$(BIN)/ruff check mission planners perception_plugins tests

@@ -9,7 +9,7 @@ quote the figures and say which was kept.
    our vectorised Floyd–Warshall against `networkx.all_pairs_dijkstra` (converted to the same arrays).
 2. Precedence graph (`planners.ordering.tsp`): the predecessor/successor lists plus a cycle check, against a
    `networkx.DiGraph` with `is_directed_acyclic_graph`; also against a whole `solve_precedence` call.
-3. The strategic level's graph of objects (`mission.strategy.order_objects`): our exact open path
+3. The strategic level's graph of objects (`mission.strategy.order_route`): our exact open path
    (`solve_tsp`, Held–Karp up to 12 objects) against `networkx.approximation.christofides` on the complete
    graph (the cycle from the vehicle's position less its return leg): time and path length.
 """

@@ -11,7 +11,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from mission.cli_export import add_export_command, add_mcap_option, write_mcap_if_asked
 from mission.cli_onboard import add_onboard_commands
+from mission.cli_plan import add_plan_commands
 from mission.errors import AuvError, MissionError
 from mission.extras import has, require
 
@@ -21,9 +23,13 @@ def _validate(args: argparse.Namespace) -> int:
 
     status = 0
     for path in args.missions:
-        _, diags = validate_mission_file(path)
+        mission, diags = validate_mission_file(path)
         for d in diags:
             print(d)
+        if args.estimate and mission is not None:
+            from mission.cli_plan import print_estimate
+
+            print_estimate(mission, args.json)
         errors = sum(1 for d in diags if not d.warning)
         warnings = len(diags) - errors
         if errors:
@@ -79,6 +85,7 @@ def _simulate(args: argparse.Namespace) -> int:
     if args.record_stereo:
         pairs = len(result.vehicle.log.frames)
         print(f"stereo stream: {pairs} pair(s) in {out / 'stereo'} (KITTI layout; `auv vo {out / 'stereo'}`)")
+    write_mcap_if_asked(args, out)
     return 0 if m["completed"] else 1
 
 
@@ -229,6 +236,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("validate", help="check missions and report every problem as FILE:LINE:COL")
     p.add_argument("missions", nargs="+", help="mission YAML files")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing for valid missions")
+    p.add_argument("--estimate", action="store_true",
+                   help="also print each valid mission's distance, duration, energy and coverage estimate")
+    p.add_argument("--json", action="store_true", help="with --estimate, the estimate as JSON")
     p.set_defaults(func=_validate)
 
     p = sub.add_parser("schema", help="print the JSON Schema of the mission language")
@@ -250,6 +260,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="each perception plug-in call's latency charged to the simulated clock (default 0.1 s: "
                    "runs repeat exactly for a seed); 'measured': the call's CPU time, so the run depends on the "
                    "machine")
+    add_mcap_option(p)
     p.set_defaults(func=_simulate)
 
     p = sub.add_parser("plot", help="redraw a run folder's figures from its files")
@@ -296,6 +307,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--extend", help="extend this existing model with the run's views instead")
     p.set_defaults(func=_model_build)
     add_onboard_commands(sub)
+    add_plan_commands(sub)
+    add_export_command(sub)
     return parser
 
 

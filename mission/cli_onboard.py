@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from mission.cli_export import add_mcap_option, write_mcap_if_asked
 from mission.errors import MissionError
 
 
@@ -35,6 +36,7 @@ def _run(args: argparse.Namespace) -> int:
         extra = f" ({e['reason']})" if e.get("reason") else ""
         print(f"  {e['id']:<24} {e['kind']:<9} {e['status']:<10} {e['duration_s']:8.1f} s{extra}")
     print(f"run folder: {out}")
+    write_mcap_if_asked(args, out)
     return 0 if m["completed"] else 1
 
 
@@ -117,6 +119,7 @@ def add_onboard_commands(sub: Any) -> None:
     p.add_argument("--out", help="run folder (default: runs/MISSION_NAME-onboard)")
     p.add_argument("--connect-timeout", type=float, default=10.0, metavar="S",
                    help="seconds to wait for the vehicle (default 10)")
+    add_mcap_option(p)
     p.set_defaults(func=_run)
 
     p = sub.add_parser("vehicles", help="list installed vehicle adapters (entry-point group auv.vehicles)")

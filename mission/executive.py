@@ -27,7 +27,7 @@ from mission.knowledge import Knowledge
 from mission.language.models import Mission, RouteElement, Transit
 from mission.plugin_host import PluginHost
 from mission.safety import SafetyMonitors, Violation, abort_legs, policy_record
-from mission.strategy import inspection_run, order_objects
+from mission.strategy import StrategicLevel
 from mission.vehicle import Command, NavState, Observation, VehicleInterface
 
 MARGIN_S = 120.0  # extra time every default timeout allows
@@ -42,6 +42,7 @@ class ElementStatus(enum.StrEnum):
     TIMEOUT = "timeout"
     ABORTED = "aborted"
     SKIPPED = "skipped"
+    DROPPED = "dropped"  # by the strategic level, before it began: the budget could not cover it
 
 
 @dataclass
@@ -271,31 +272,18 @@ class Executive:
             self._finish_safe(nav)
         self.report.end_time = nav.time
         self.report.completed = not abort_reason and not self.report.link_lost and all(
-            r.status is ElementStatus.SUCCEEDED for r in self.report.elements)
+            r.status in (ElementStatus.SUCCEEDED, ElementStatus.DROPPED) for r in self.report.elements)
         self.emit("mission_finished", nav.time, completed=self.report.completed, aborted=self.report.aborted,
                   reason=self.report.abort_reason)
         return self.report
 
     def _route(self) -> str:
-        """Run the route elements in order; the reason to abort, or "" when every element had its chance."""
-        m = self.mission
+        """Run the route as the strategic level plans it (`mission.strategy`: before the first element and again
+        after each, on what is left); the reason to abort, or "" when every element had its chance."""
         abort_reason = ""
-        route = list(m.route)
-        for index in range(len(route)):
-            nav = self._last_nav
-            assert nav is not None
-            end = inspection_run(route, index)
-            if not abort_reason and end - index >= 2 and (index == 0 or route[index - 1].inspect is None):
-                ordered = order_objects(m, route[index:end], nav.north, nav.east, m.seed)
-                if ordered != route[index:end]:
-                    route[index:end] = ordered
-                    self.emit("route_reordered", nav.time, elements=[e.id for e in route],
-                              reason="inspections in the shortest visiting order")
-            element = route[index]
-            if abort_reason:
-                self.report.elements.append(ElementReport(element.id, element.kind, ElementStatus.SKIPPED))
-                continue
-            rep = self._element(element, nav)
+        strategy = StrategicLevel(self.mission, self.emit, self.report.start_time)
+        while not abort_reason and self._last_nav is not None and (element := strategy.next(self._last_nav)):
+            rep = self._element(element, self._last_nav)
             self.report.elements.append(rep)
             if self.report.link_lost:
                 abort_reason = f"link lost during '{element.id}'"
@@ -305,6 +293,10 @@ class Executive:
                 abort_reason = "; ".join(v["message"] for v in self.report.violations[-3:])
             elif rep.status is not ElementStatus.SUCCEEDED and element.on_failure == "abort":
                 abort_reason = f"element '{element.id}' {rep.status}: {rep.reason}"
+        for element in strategy.skip_rest():
+            status, why = next(((ElementStatus.DROPPED, why) for e, why in strategy.dropped if e is element),
+                               (ElementStatus.SKIPPED, ""))
+            self.report.elements.append(ElementReport(element.id, element.kind, status, reason=why))
         if abort_reason:
             self.report.abort_reason = abort_reason
         return abort_reason

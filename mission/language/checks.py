@@ -32,6 +32,7 @@ from mission.language.models import (
     Transit,
 )
 from mission.language.source import Located, PathKey
+from mission.language.viewpoints import forbidden_viewpoints
 
 
 @dataclass
@@ -232,6 +233,16 @@ def _legs_outside(doc: Located, parts: Parts, fence: ShapelyPolygon) -> list[Dia
     return out
 
 
+def _check_viewpoints(doc: Located, parts: Parts) -> list[Diagnostic]:
+    """Warnings for target viewpoints that the database shows below the minimum altitude (`viewpoints`)."""
+    if parts.safety is None:
+        return []
+    return [dataclasses.replace(doc.diagnostic(("objects", i, "targets", k), message), warning=True)
+            for i, obj in parts.objects
+            for k, message in forbidden_viewpoints(obj, parts.safety.min_altitude)]
+
+
 def cross_check(doc: Located, parts: Parts) -> list[Diagnostic]:
     """Every cross-section problem of a mission whose sections validated (fully or partly)."""
-    return _check_objects(doc, parts) + _check_route(doc, parts) + _check_envelope(doc, parts)
+    return (_check_objects(doc, parts) + _check_route(doc, parts) + _check_envelope(doc, parts)
+            + _check_viewpoints(doc, parts))

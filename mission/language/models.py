@@ -8,15 +8,42 @@ Frames: local NED in metres, headings in degrees clockwise from north.
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
+import pydantic
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
+from mission import geodesy
 from mission.language.units import Duration, Percent
 
 Vec2 = tuple[float, float]
 Vec3 = tuple[float, float, float]
-Polygon = Annotated[list[Vec2], Field(min_length=3, description="[[north, east], ...] in metres")]
+
+
+def _unplaced_geodetic(value: object) -> object:
+    """A `{lat, lon}` point still here was not converted by `Mission` (see `mission.geodesy.localize`): say why."""
+    if geodesy.is_geodetic(value):
+        if not geodesy.valid_geodetic(value):
+            raise ValueError("a geodetic point is {lat, lon} with lat in [-90, 90] and lon in [-180, 180] (degrees)")
+        raise ValueError("a {lat, lon} point needs the mission's `origin: {lat, lon}` to place it in the local frame")
+    return value
+
+
+_GEODETIC_SCHEMA = {"type": "object", "additionalProperties": False, "required": ["lat", "lon"],
+                    "properties": {"lat": {"type": "number", "minimum": -90, "maximum": 90},
+                                   "lon": {"type": "number", "minimum": -180, "maximum": 180}}}
+def _or_geodetic(schema: dict[str, Any]) -> None:
+    local = dict(schema)
+    schema.clear()
+    schema["anyOf"] = [local, _GEODETIC_SCHEMA]
+
+
+# A point of a polygon: [north, east] metres, or {lat, lon} degrees that `Mission` converts with its `origin`.
+PlanePoint = Annotated[Vec2, pydantic.BeforeValidator(_unplaced_geodetic), pydantic.WithJsonSchema({"anyOf": [
+    {"type": "array", "prefixItems": [{"type": "number"}, {"type": "number"}], "minItems": 2, "maxItems": 2},
+    _GEODETIC_SCHEMA]})]
+Polygon = Annotated[list[PlanePoint], Field(min_length=3, description="[[north, east], ...] in metres, or "
+                                                                      "{lat, lon} points (degrees, WGS84)")]
 Identifier = Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.\-]+$")]
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
@@ -27,7 +54,7 @@ class Strict(BaseModel):
 
 
 class Origin(Strict):
-    """Geodetic origin of the local NED frame (used for exports only)."""
+    """Geodetic origin (WGS84 degrees) of the local NED frame: exports and `{lat, lon}` points need it."""
 
     lat: Annotated[float, Field(ge=-90, le=90)]
     lon: Annotated[float, Field(ge=-180, le=180)]
@@ -174,8 +201,17 @@ class KnownObject(Strict):
 
 
 class Point(Strict):
+    """A point in the local frame; `{lat, lon}` is accepted too and converted with the mission's `origin`."""
+
+    model_config = ConfigDict(json_schema_extra=lambda schema: _or_geodetic(schema))
+
     north: float
     east: float
+
+    @model_validator(mode="before")
+    @classmethod
+    def _geodetic_placed(cls, data: object) -> object:
+        return _unplaced_geodetic(data)
 
 
 class Transit(Strict):
@@ -266,6 +302,7 @@ class RouteElement(Strict):
     actions: list[Action] = []
     timeout: Duration | None = None
     on_failure: Literal["continue", "abort"] = "continue"
+    priority: Annotated[int, Field(ge=-100, le=100)] = 0  # when the budget falls short, the lowest is dropped first
 
     @model_validator(mode="after")
     def _exactly_one_kind(self) -> RouteElement:
@@ -284,12 +321,20 @@ class RouteElement(Strict):
         return getattr(self, self.kind)  # type: ignore[no-any-return]
 
 
+class Strategy(Strict):
+    """The strategic level (seed 002 §1, `mission.strategy`): the order of the work bound to known objects, and
+    the share of the time and energy budgets kept in hand when it decides what fits."""
+
+    order: Literal["auto", "as-listed"] = "auto"
+    budget_margin: Percent = 10.0
+
+
 class Mission(Strict):
     """A whole mission. The loader resolves `world` to an absolute path and records the source file."""
 
     name: Identifier
     description: str = ""
-    origin: Origin = Origin(lat=0.0, lon=0.0)
+    origin: Origin | None = None  # required by exports and by `{lat, lon}` points; never assumed
     world: str | None = None
     seed: int = 0
     home: Home = Home()
@@ -297,9 +342,15 @@ class Mission(Strict):
     sensors: Sensors = Sensors()
     plugins: Plugins = Plugins()
     safety: Safety = Safety()
+    strategy: Strategy = Strategy()
     objects: list[KnownObject] = []
     route: Annotated[list[RouteElement], Field(min_length=1)]
     _source: str | None = PrivateAttr(default=None)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _geodetic_to_local(cls, data: object) -> object:
+        return geodesy.localize(data)
 
     @property
     def source(self) -> str | None:

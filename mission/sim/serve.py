@@ -129,7 +129,9 @@ def serve(mission: Mission, address: str | Sequence[str], seed: int | None = Non
         if on_event is not None:
             on_event(record)
 
-    autopilot = SimAutopilot(vehicle, (mission.origin.lat, mission.origin.lon), links.send_all, log,
+    # the simulated GPS needs a place on the globe, as SITL's default home: (0, 0) for a mission without `origin`
+    where = (mission.origin.lat, mission.origin.lon) if mission.origin is not None else (0.0, 0.0)
+    autopilot = SimAutopilot(vehicle, where, links.send_all, log,
                              gcs_timeout=gcs_timeout)
     wall0 = base = time.monotonic()
     base_steps = 0

@@ -66,8 +66,8 @@ def _has_rangefinder(link: MavlinkLink) -> bool:
 def _check_origin(link: MavlinkLink, mission: Mission, options: VehicleOptions, wait: float) -> None:
     """Log `vehicle_origin_mismatch` when the vehicle's EKF origin (global position minus local position) is
     more than ORIGIN_TOLERANCE_M from the mission's `origin`."""
-    if not link.wait_for(lambda lk: lk.latest("GLOBAL_POSITION_INT") is not None, wait):
-        return
+    if mission.origin is None or not link.wait_for(lambda lk: lk.latest("GLOBAL_POSITION_INT") is not None, wait):
+        return  # without an origin there is nothing to compare the vehicle's with
     gp, lp = link.latest("GLOBAL_POSITION_INT"), link.latest("LOCAL_POSITION_NED")
     lat0 = mission.origin.lat
     north = math.radians(gp.lat / 1e7 - lat0) * EARTH_RADIUS_M
