@@ -6,6 +6,10 @@ altitude, 1 m/s turning at 20°/s at 10 Hz).
 Sequences are rendered once into the KITTI odometry layout (`StereoRecorder`) under a cache folder
 (`AUV_VO_CACHE`, default the system temp folder's `auv-vo-turns/`), keyed by the sequence's parameters, and read
 back with `read_kitti_sequence` (so `auv vo` runs on them too); nothing is stored in the repository.
+
+`python -m mission.bench.vo_turns FILE` runs the before / now / with-BA comparison of every method on the shared
+KITTI clip and every turning sequence alone (`study`; `benchmarks/results/vo_turns.json`), without the benchmark's
+other studies.
 """
 
 from __future__ import annotations
@@ -162,3 +166,34 @@ def turns(quick: bool) -> dict[str, Any]:
 
 __all__ = ["BEFORE", "BUNDLE", "METHODS", "SEQUENCES", "Turning", "heading_profile", "run_sequence", "sequence_folder",
            "turns"]
+
+
+def study(out: Path) -> dict[str, Any]:
+    """Every method before / now / with the bundle adjustment on the shared KITTI clip (when present) and on every
+    turning sequence, written to `out` as JSON: the turning part of `auv bench vo` without its other studies."""
+    import cv2
+
+    from mission.bench import REPO, machine
+
+    cv2.setNumThreads(1)
+    results: dict[str, Any] = {"machine": machine(), "before": BEFORE, "bundle": BUNDLE}
+    kitti = Path(os.environ.get("AUV_VO_KITTI", REPO.parent / "shared" / "data" / "kitti06_0-50"))
+    results["turns"] = {}
+    jobs: list[tuple[str, Turning | None]] = [(s.name, s) for s in SEQUENCES]
+    if (kitti / "poses.txt").exists():
+        jobs.insert(0, ("kitti", None))
+    for name, spec in jobs:  # written after each sequence: a long study shows what it has
+        if spec is None:
+            results["kitti"] = {"sequence": str(kitti), **run_sequence(kitti)}
+        else:
+            results["turns"][name] = {"turns_deg": list(spec.turns_deg), "camera": spec.camera,
+                                      "speed_m_s": spec.speed_m_s, "rate_deg_s": spec.rate_deg_s,
+                                      **run_sequence(sequence_folder(spec))}
+        out.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
+    return results
+
+
+if __name__ == "__main__":
+    import sys
+
+    study(Path(sys.argv[1]))
