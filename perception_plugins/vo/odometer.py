@@ -96,12 +96,13 @@ class OdometerSettings:
     bundle_window: int | None = None
     """Keyframes (fragment ends) in a local bundle adjustment (`window.KeyframeWindow`); None: none. Off by default:
     with 8 keyframes (KLT, tracks carried) the end-point drift was KITTI 06 0.69 → 0.89 %, rendered turns (`auv bench
-    vo`) forward 90° 0.41 → 0.26 %, forward S 0.20 → 0.17 %, down 90° 0.19 → 0.05 %: no consistent gain, and 15–40 %
-    of the frame rate."""
+    vo`) forward 90° 0.41 → 0.26 %, forward S 0.20 → 0.17 %, down 90° 0.19 → 0.05 %, down S 0.10 → 0.20 %: no
+    consistent gain, for 10–50 % of the frame rate (`benchmarks/results/vo_turns.json`)."""
     carry_tracks: bool = True
     """KLT: a fragment's start continues the previous fragment's survivors as features and detects new corners only
     away from them (`KltTracker.carry`). End-point drift against fresh corners at every start: KITTI 06 0.85 →
-    0.69 %, rendered turns forward 90° 0.24 → 0.41 %, forward S 0.32 → 0.20 %, down 90° 0.13 → 0.19 %."""
+    0.69 % (0.71 → 0.63 % on average over four start frames), rendered turns forward 90° 0.24 → 0.41 %, forward S
+    0.32 → 0.20 %, down 90° 0.13 → 0.19 %, down S 0.17 → 0.10 %."""
     tracking_lowpass_px: float | None = 1.5
     """KLT: the images LK tracks across time (step to step, and back to the fragment's start) are low-passed to
     this total σ (px), the prefilter's included; corners and the stereo matching keep the prefiltered images. LK's
