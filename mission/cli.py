@@ -14,6 +14,7 @@ from typing import Any
 from mission.cli_export import add_export_command, add_mcap_option, write_mcap_if_asked
 from mission.cli_onboard import add_onboard_commands
 from mission.cli_plan import add_plan_commands
+from mission.cli_report import add_report_command
 from mission.errors import AuvError, MissionError
 from mission.extras import has, require
 
@@ -108,7 +109,9 @@ def _campaign(args: argparse.Namespace, name: str) -> int:
         raise AuvError("--seeds runs many seeded runs: it does not combine with --seed or --record-stereo")
     seeds = parse_seeds(args.seeds)
     out = Path(args.out) if args.out else Path("runs") / f"{name}-seeds"
-    print(f"{name}: {len(seeds)} seeded run(s), {args.jobs} at a time, into {out}/seed-N/")
+    where = ("on Dask at " + args.dask if args.dask else "on a local Dask cluster") if args.dask is not None \
+        else f"{args.jobs} at a time"
+    print(f"{name}: {len(seeds)} seeded run(s), {where}, into {out}/seed-N/")
 
     def line(row: dict[str, Any]) -> None:
         if "error" in row:
@@ -120,7 +123,7 @@ def _campaign(args: argparse.Namespace, name: str) -> int:
               + (f"  failed: {', '.join(failed)}" if failed else ""), flush=True)
 
     report = run_campaign(args.mission, seeds, out, jobs=args.jobs, plots=not args.no_plots, on_run=line,
-                          plugin_latency_s=args.plugin_latency)
+                          plugin_latency_s=args.plugin_latency, dask=args.dask)
     s = report["summary"]
     print(f"completed {s['completed']}/{s['runs']} ({s['completed_percent']:g} %), aborted {s['aborted']}, "
           f"crashed {s['crashed']}, safety violations {s['safety_violations']}")
@@ -252,6 +255,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seeds", metavar="LIST", help="many seeded runs, e.g. 1-20 or 1,5,9: OUT/seed-N/ each and "
                    "OUT/campaign.json with the completion rate and the worst figures (default OUT runs/NAME-seeds)")
     p.add_argument("--jobs", type=int, default=1, help="with --seeds, runs at a time (processes; default 1)")
+    p.add_argument("--dask", nargs="?", const="", default=None, metavar="SCHEDULER_ADDRESS",
+                   help="with --seeds, run on Dask: a local cluster of --jobs workers, or the scheduler at the "
+                   "address (workers anywhere; see the README on shared run folders)")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.add_argument("--record-stereo", action="store_true",
@@ -308,6 +314,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_model_build)
     add_onboard_commands(sub)
     add_plan_commands(sub)
+    add_report_command(sub)
     add_export_command(sub)
     return parser
 

@@ -100,8 +100,9 @@ class _Site:
     """The chart, and the survey plans made so far (a plan depends on where the survey begins only through its
     first line)."""
 
-    def __init__(self, chart: Chart | None):
+    def __init__(self, chart: Chart | None, plan_surveys: bool = True):
         chart = chart or Chart()
+        self.plan_surveys = plan_surveys
         self.plans: dict[str, Any] = {}
         self.seabed_depth = chart.depth_at
         self.current = chart.current
@@ -116,9 +117,9 @@ class RouteEstimator:
     """Estimates of route elements flown in a given order from a given position (the strategic level re-plans
     with it; `estimate_mission` gives the whole route's)."""
 
-    def __init__(self, mission: Mission, chart: Chart | None = None):
+    def __init__(self, mission: Mission, chart: Chart | None = None, plan_surveys: bool = True):
         self.mission = mission
-        self.site = _Site(chart)
+        self.site = _Site(chart, plan_surveys)
 
     def route(self, elements: Sequence[RouteElement], north: float, east: float,
               depth: float) -> list[ElementEstimate]:
@@ -133,11 +134,13 @@ class RouteEstimator:
 
 
 def estimate_mission(mission: Mission, route: Sequence[RouteElement] | None = None,
-                     estimator: RouteEstimator | None = None, chart: Chart | None = None) -> MissionEstimate:
+                     estimator: RouteEstimator | None = None, chart: Chart | None = None,
+                     plan_surveys: bool = True) -> MissionEstimate:
     """The estimate of every element of `route` (default: the mission's, as listed) from the home position, and
-    warnings against `max_duration` and the energy reserve."""
+    warnings against `max_duration` and the energy reserve. Without `plan_surveys` a survey's track is sized from
+    its area (`survey_track_m`), in microseconds instead of the coverage planner's second."""
     home = mission.home
-    estimator = estimator or RouteEstimator(mission, chart)
+    estimator = estimator or RouteEstimator(mission, chart, plan_surveys)
     estimate = MissionEstimate(estimator.route(mission.route if route is None else route,
                                                home.north, home.east, home.depth))
     safety = mission.safety
@@ -246,12 +249,18 @@ def _survey(mission: Mission, site: _Site, ident: str, p: Survey, here: _Where) 
     mbes = mission.sensors.mbes
     if mbes is None:
         return ElementEstimate(ident, "survey", 0.0, 0.0, 0.0, "plan")
+    speed = p.speed or mission.vehicle.cruise_speed
+    if not site.plan_surveys:
+        distance = survey_track_m(p, mbes.swath_deg, mission.vehicle.turn_radius)
+        duration = distance / speed
+        here.north = sum(v[0] for v in p.area) / len(p.area)  # where it ends is the plan's: take the middle
+        here.east = sum(v[1] for v in p.area) / len(p.area)
+        return ElementEstimate(ident, "survey", distance, duration, _energy(mission, duration, duration, speed), "area")
     plan = site.plans.get(ident)
     if plan is None:
         spacing = line_spacing(p.altitude, mbes.swath_deg, p.overlap)
         plan = site.plans[ident] = meander(p.area, p.exclude, spacing=spacing, heading=p.heading,
                                            turn_radius=mission.vehicle.turn_radius, start=(here.north, here.east))
-    speed = p.speed or mission.vehicle.cruise_speed
     first = plan.waypoints[0]
     approach = math.hypot(first[0] - here.north, first[1] - here.east)
     distance = approach + plan.length_m
@@ -266,6 +275,23 @@ def _survey(mission: Mission, site: _Site, ident: str, p: Survey, here: _Where) 
     cover = 100.0 * coverage_fraction(plan, p.area, p.exclude, swath_width(p.altitude, mbes.swath_deg))
     return ElementEstimate(ident, "survey", distance, duration, _energy(mission, duration, duration, speed), "plan",
                            round(cover, 2), path)
+
+
+def survey_track_m(p: Survey, swath_deg: float, turn_radius: float) -> float:
+    """A survey's track sized from its area: the free area over the line spacing, plus a half-circle turn (at
+    least the spacing) per line across the area's narrowest width."""
+    from shapely.geometry import Polygon as ShapelyPolygon
+    from shapely.ops import unary_union
+
+    from planners.coverage import line_spacing
+
+    spacing = line_spacing(p.altitude, swath_deg, p.overlap)
+    area = ShapelyPolygon([(e, n) for n, e in p.area])
+    free = area.difference(unary_union([ShapelyPolygon([(e, n) for n, e in z]) for z in p.exclude]))
+    box = area.minimum_rotated_rectangle.exterior.coords
+    sides = [math.dist(box[k], box[k + 1]) for k in range(2)]
+    lines = math.ceil(min(sides) / spacing) + 1
+    return float(free.area / spacing + (lines - 1) * max(math.pi * turn_radius, spacing))
 
 
 def _adaptive(mission: Mission, element: RouteElement, here: _Where, budget_s: float,

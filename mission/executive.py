@@ -92,6 +92,17 @@ def default_timeout(element: RouteElement, nav: NavState, mission: Mission) -> f
     return float(budget) * 1.2 + MARGIN_S if budget is not None else mission.safety.max_duration
 
 
+def timeout_for(element: RouteElement, nav: NavState, mission: Mission, abort_of: ExecutionReport | None = None
+                ) -> float:
+    """`default_timeout`, and for a leg of an abort (`abort_of`: the run's report) no later than the run's hard end,
+    `max_duration + abort_time` after its start (time a pilot held the vehicle excepted)."""
+    timeout = default_timeout(element, nav, mission)
+    if abort_of is None:
+        return timeout
+    end = abort_of.start_time + abort_of.paused_s + mission.safety.max_duration + mission.safety.abort_time
+    return min(timeout, max(end - nav.time, 0.0))
+
+
 def unsupported_elements(mission: Mission, agents: Mapping[str, object] | None = None) -> list[RouteElement]:
     """The route elements whose kind has no agent (in `agents`, by default the registry)."""
     kinds = REGISTRY if agents is None else agents
@@ -140,7 +151,7 @@ class Executive:
              ) -> ElementReport:
         nav = self.vehicle.observe().nav
         rep = ElementReport(element_id, kind, ElementStatus.RUNNING, start_time=nav.time)
-        timeout = default_timeout(element, nav, self.mission)
+        timeout = timeout_for(element, nav, self.mission, self.report if aborting else None)
         try:
             agent.start(AgentContext(self.mission, element, nav, self.emit, self.report.knowledge, self.plugins,
                                      self.artifacts))

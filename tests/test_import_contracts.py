@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 # Modules of `mission` that are not the onboard core: the simulator and its worlds, plots, benchmarks, the CLI and
 # the offline tools that read recordings or run folders made by the simulator.
 TOOLS = ("mission/sim/", "mission/world/", "mission/bench/", "mission/cli.py", "mission/cli_onboard.py",
-         "mission/cli_plan.py",
+         "mission/cli_plan.py", "mission/cli_report.py", "mission/campaign_report.py",
          "mission/__main__.py", "mission/model_build.py")
 
 CORE_FORBIDDEN = ("mission.sim", "mission.world", "mission.bench", "mission.cli", "mission.cli_onboard",

@@ -1,14 +1,21 @@
 """The photo survey of a flat object (seed 002 §2.2.1), the `explore` element with `planner: rrt-photo`.
 
 For each target, the down-looking stereo camera photographs the object's area (its footprint plus `MARGIN_M`)
-along `planners.rrt.photo_survey_path`: passes spaced by the camera footprint and the overlap, denser over the
-informative parts of the survey's information map, joined by Dubins turns for the turning radius (checked
-against the occupancy map seeded from the survey's height map, re-planned with RRT* when blocked). The camera
+along `planners.rrt.informative_survey_path`: a receding-horizon RIG tree over the survey's information map
+(Î over the area floored at `COVERAGE_FLOOR`, so all of it is worth a photograph and its informative parts
+several), Dubins curves for the turning radius checked against the occupancy map seeded from the survey's height
+map, from the area's corner nearest the vehicle on the heading it arrives with, until at most `ENOUGH` of the
+area's information is unrevealed. Its path budget is the length of the spacing-scaled lawnmower over the same area
+(`planners.rrt.photo_survey_path`), capped by `BUDGET_SHARE` of the element's time budget at the survey speed;
+the lawnmower is flown instead when the RIG finds no clear way from its start. The camera
 flies `safe_distance + NAV_MARGIN_M` above the object's top (within the stereo range); photographs are triggered
 at the plan's photo points: the agent switches the camera on, takes the first pair that arrives with the
-*estimated* pose, and switches it off. `photo_coverage_percent` is the share of the object's area inside the
+*estimated* pose, and switches it off; a photo point the vehicle passes without coming near is given up once the
+path follower is `SKIP_LEGS` legs past it. `photo_coverage_percent` is the share of the object's area inside the
 union of the photographs' footprints, placed at their estimated poses. The pairs go into `Knowledge.maps` and
-`mission.sim.photos` writes them into the run folder (`photos/`) with their estimated and true poses.
+`mission.sim.photos` writes them into the run folder (`photos/`) with their estimated and true poses; the
+information map of each target's plan goes into the element's maps (`photo_info_K`, `photo_info_grid_K`: north0,
+east0, cell).
 """
 
 from __future__ import annotations
@@ -25,7 +32,14 @@ from mission.agents.explore_region import Target, prior_map, survey_map_for
 from mission.agents.report import ExploredObject, ExploreReport
 from mission.agents.waypoints import PathFollower
 from mission.vehicle import Command, Observation
-from planners.rrt import ClearanceGrid, InformationField, PhotoSurvey, photo_survey_path
+from planners.rrt import (
+    ClearanceGrid,
+    InformationField,
+    InformativeSurvey,
+    PhotoSurvey,
+    informative_survey_path,
+    photo_survey_path,
+)
 
 MARGIN_M = 1.0
 NAV_MARGIN_M = 1.0
@@ -33,6 +47,11 @@ OVERLAP = 0.6
 GAIN = 2.0
 SURVEY_SPEED = 0.5  # m/s over the object: slow enough for sharp photographs
 TRIGGER_M = 0.6
+BUDGET_SHARE = 0.7  # of the element's time budget flown surveying (the rest: approaches and climbing away)
+COVERAGE_FLOOR = 0.2  # Î over the object's area is at least this: all of it is worth a photograph
+ENOUGH = 0.02  # ends when 98 % is revealed: repeated photographs, informative ground first, keep the coverage
+MIN_RADIUS_M = 1.0  # the Dubins radius used when the vehicle declares no turning radius
+SKIP_LEGS = 4  # a photo point whose path point lies this many legs behind the follower's is given up
 
 
 def footprint_polygon(north: float, east: float, heading_deg: float, across: float, along: float) -> Polygon:
@@ -53,6 +72,33 @@ def target_area(t: Target, margin: float) -> np.ndarray:
                                                                                       (-1, 1))])
 
 
+def photo_indices(path: np.ndarray, points: np.ndarray) -> list[int]:
+    """For each photo point in order, the index of the nearest path point at or after the previous one's (a path
+    that crosses itself keeps each photograph at its own pass)."""
+    out, j0 = [], 0
+    for p in points:
+        j = j0 + int(np.argmin(np.hypot(path[j0:, 0] - p[0], path[j0:, 1] - p[1]))) if j0 < len(path) else j0
+        out.append(j)
+        j0 = j
+    return out
+
+
+def informative_plan(lawn: PhotoSurvey, area: np.ndarray, info: InformationField, grid: ClearanceGrid,
+                     budget: float, start: np.ndarray, heading_deg: float, altitude: float, fov: tuple[float, float],
+                     radius: float, safe_distance: float, seed: int) -> PhotoSurvey | InformativeSurvey:
+    """The RIG plan over the area from `start` (the area's corner nearest the vehicle, entered on the heading it
+    arrives with), with the lawnmower's path length as its budget (capped by the element's time); the lawnmower
+    itself when the RIG finds no way (start not clear)."""
+    try:
+        plan = informative_survey_path(area, info, budget=budget, altitude=altitude, depth=float(lawn.path[0, 2]),
+                                       turning_radius=radius, start=start, start_heading_deg=heading_deg,
+                                       fov_deg=fov, overlap=OVERLAP, gain=GAIN, coverage_floor=COVERAGE_FLOOR,
+                                       enough=ENOUGH, clearance=grid, safety_distance=safe_distance, seed=seed)
+    except ValueError:  # the start is not clear
+        return lawn
+    return plan if len(plan.path) > 1 else lawn
+
+
 class PhotoSurveyRun:
     """Drives the photo survey for `ExploreAgent` (which delegates `step` to it)."""
 
@@ -70,7 +116,9 @@ class PhotoSurveyRun:
         self.altitude = min(p.safe_distance + NAV_MARGIN_M, 0.9 * stereo.max_range)
         self.payload: frozenset[str] = frozenset()
         self.finished = False
-        self.plans: list[tuple[Target, PhotoSurvey, np.ndarray]] = []
+        self.plans: list[tuple[Target, PhotoSurvey | InformativeSurvey, np.ndarray]] = []
+        self.fields: list[InformationField] = []
+        here = np.array([context.nav.north, context.nav.east])
         for t in targets:
             area = target_area(t, MARGIN_M)
             products = survey_map_for(context.knowledge, t)
@@ -82,10 +130,17 @@ class PhotoSurveyRun:
             lo = np.array([t.north - 20.0, t.east - 20.0, depth - 8.0])
             hi = np.array([t.north + 20.0, t.east + 20.0, t.bottom_depth + 1.0])
             grid = ClearanceGrid.from_voxel_map(prior_map(products, lo, hi, 0.5), lo, hi, unknown="free")
-            plan = photo_survey_path(area, info, altitude=self.altitude, depth=depth, fov_deg=self.fov,
+            lawn = photo_survey_path(area, info, altitude=self.altitude, depth=depth, fov_deg=self.fov,
                                      overlap=OVERLAP, gain=GAIN, turning_radius=m.vehicle.turn_radius,
                                      clearance=grid, safety_distance=p.safe_distance, seed=m.seed)
+            budget = min(lawn.length, p.budget * SURVEY_SPEED * BUDGET_SHARE / len(targets))
+            self.fields.append(info)
+            start = area[int(np.argmin(np.hypot(area[:, 0] - here[0], area[:, 1] - here[1])))]
+            heading = math.degrees(math.atan2(start[1] - here[1], start[0] - here[0]))
+            plan = informative_plan(lawn, area, info, grid, budget, start, heading, self.altitude, self.fov,
+                                    max(m.vehicle.turn_radius, MIN_RADIUS_M), p.safe_distance, m.seed)
             self.plans.append((t, plan, area))
+            here = plan.path[-1, :2]
         self.index = 0
         self.phase = "approach"
         self.speed = m.vehicle.cruise_speed
@@ -98,6 +153,7 @@ class PhotoSurveyRun:
         _, plan, _ = self.plans[self.index]
         self.follower = PathFollower((north, east), plan.path[:, :2], lookahead=4.0, acceptance=1.0)
         self.next_photo = 0
+        self.photo_at = photo_indices(plan.path[:, :2], plan.photo_points[:, :2])
 
     def planned_path(self) -> list[tuple[float, float]]:
         return [(float(n), float(e)) for _, plan, _ in self.plans for n, e in plan.path[:, :2]]
@@ -121,6 +177,9 @@ class PhotoSurveyRun:
             self.payload = frozenset()
             self.next_photo += 1
         points = plan.photo_points
+        while not self.payload and self.next_photo < len(points) and \
+                self.photo_at[self.next_photo] < self.follower.leg - 1 - SKIP_LEGS:
+            self.next_photo += 1  # passed without coming near it: missed, the next one is due
         if not self.payload and self.next_photo < len(points):
             p = points[self.next_photo]
             ahead = (p[0] - nav.north) * math.cos(math.radians(nav.heading)) + \
@@ -151,7 +210,8 @@ class PhotoSurveyRun:
             obj = Polygon([(e, n) for n, e in target_area(t, 0.0)])
             covered = shapely.union_all(shapes).intersection(obj).area / obj.area if shapes else 0.0
             objects.append(ExploredObject(t.id, t.source, round(t.north, 2), round(t.east, 2), {
-                            "photos": len(taken), "passes": len(plan.passes),
+                            "photos": len(taken), "planner": "rig" if isinstance(plan, InformativeSurvey)
+                            else "lawnmower",
                             "planned_photos": int(len(plan.photo_points)), "altitude_m": round(self.altitude, 2),
                             "planned_length_m": round(plan.length, 1),
                             "photo_coverage_percent": round(100.0 * covered, 2)}))
@@ -166,6 +226,9 @@ class PhotoSurveyRun:
             "photo_index": index, "photo_path": np.concatenate([pl.path for _, pl, _ in self.plans]),
             "photo_points": np.concatenate([pl.photo_points for _, pl, _ in self.plans]),
             "photo_areas": np.stack([a for _, _, a in self.plans])}
+        for k, field in enumerate(self.fields):  # the information map each target's plan was made over
+            products[f"photo_info_{k}"] = np.asarray(field.values, dtype=float)
+            products[f"photo_info_grid_{k}"] = np.array([field.north0, field.east0, field.cell])
         if self.images:
             products["photo_left"] = np.stack([left for left, _ in self.images])
             products["photo_right"] = np.stack([right for _, right in self.images])

@@ -31,6 +31,7 @@ BENCHMARKS: dict[str, str] = {
     "nbv": "mission.bench.nbv",
     "multiview": "mission.bench.multiview",
     "vo": "mission.bench.vo",
+    "photo-survey": "mission.bench.photo_survey",
 }
 
 BenchFn = Callable[[bool], tuple[dict[str, Any], dict[str, dict[str, Any]]]]

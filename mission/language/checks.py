@@ -30,8 +30,10 @@ from mission.language.models import (
     Sensors,
     Survey,
     Transit,
+    VehicleSettings,
 )
 from mission.language.source import Located, PathKey
+from mission.language.timing import check_timing
 from mission.language.viewpoints import forbidden_viewpoints
 
 
@@ -46,6 +48,7 @@ class Parts:
     objects: list[tuple[int, KnownObject]] = field(default_factory=list)
     route: list[tuple[int, RouteElement]] = field(default_factory=list)
     raw_object_ids: set[str] = field(default_factory=set)  # ids of objects, even those that did not validate
+    vehicle: VehicleSettings | None = None
 
 
 def _hint(name: str, known: Iterable[str]) -> str:
@@ -245,4 +248,4 @@ def _check_viewpoints(doc: Located, parts: Parts) -> list[Diagnostic]:
 def cross_check(doc: Located, parts: Parts) -> list[Diagnostic]:
     """Every cross-section problem of a mission whose sections validated (fully or partly)."""
     return (_check_objects(doc, parts) + _check_route(doc, parts) + _check_envelope(doc, parts)
-            + _check_viewpoints(doc, parts))
+            + _check_viewpoints(doc, parts) + check_timing(doc, parts))

@@ -3,18 +3,56 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from pydantic import BaseModel, ValidationError
 
 from mission.errors import Diagnostic, MissionError, PluginError
 from mission.language.checks import Parts, cross_check
-from mission.language.models import Home, KnownObject, Mission, Plugins, RouteElement, Safety, Sensors
-from mission.language.source import Located, read_yaml
+from mission.language.limits import MAX_DIAGNOSTICS
+from mission.language.models import (
+    Home,
+    KnownObject,
+    Mission,
+    Plugins,
+    RouteElement,
+    Safety,
+    Sensors,
+    VehicleSettings,
+)
+from mission.language.reading import UnreadableFile, read_bounded
+from mission.language.source import Located, parse_yaml, read_yaml
+from mission.language.timing import duration_warning
 from mission.language.validation import validate_as
 from mission.language.world import World
 from mission.plugins import describe_installed, installed_plugins
+
+T = TypeVar("T")
+_NOTHING: tuple[Any, list[Diagnostic]] = (None, [])
+
+
+def _guarded(doc: Located, check: Callable[[], T], fallback: T) -> T:
+    """Run a check; an arithmetic error in it (a number too large or too small for the computation, which the
+    schema's bounds should have refused) becomes a diagnostic of the file, never a traceback."""
+    try:
+        return check()
+    except (ArithmeticError, ValueError) as exc:
+        doc.problems.append(Diagnostic(doc.file, 1, 1, f"a number in this file cannot be used in the checks "
+                                                       f"({type(exc).__name__}); check the values' magnitudes"))
+        return fallback
+
+
+def _capped(diags: list[Diagnostic]) -> list[Diagnostic]:
+    """Every problem, sorted; past `MAX_DIAGNOSTICS`, the rest are counted in a last line."""
+    ordered = sorted(set(diags), key=lambda d: (d.file, d.line, d.col, d.message))
+    if len(ordered) <= MAX_DIAGNOSTICS:
+        return ordered
+    last = ordered[MAX_DIAGNOSTICS - 1]
+    more = len(ordered) - MAX_DIAGNOSTICS
+    return ordered[:MAX_DIAGNOSTICS] + [Diagnostic(last.file, last.line, last.col,
+                                                   f"... and {more} more problem(s) not shown")]
 
 
 def _mapping_document(doc: Located, what: str) -> list[Diagnostic]:
@@ -55,7 +93,8 @@ def _parts(doc: Located) -> Parts:
     data: dict[str, Any] = doc.data
     parts = Parts()
     sections: tuple[tuple[str, type[BaseModel]], ...] = (
-        ("safety", Safety), ("sensors", Sensors), ("plugins", Plugins), ("home", Home))
+        ("safety", Safety), ("sensors", Sensors), ("plugins", Plugins), ("home", Home),
+        ("vehicle", VehicleSettings))
     for key, model in sections:
         if key in data:
             setattr(parts, key, _salvage(doc, model, (key,)))
@@ -96,20 +135,52 @@ def resolve_world_path(mission_file: Path, world: str) -> Path:
     return path if path.is_absolute() else (mission_file.parent / path).resolve()
 
 
-def validate_world_file(path: Path) -> tuple[World | None, list[Diagnostic]]:
-    """Validate a world file."""
-    doc = read_yaml(path)
+def _validate_world_doc(doc: Located) -> tuple[World | None, list[Diagnostic]]:
     diags = list(doc.problems) + _mapping_document(doc, "world")
     if diags:
         return None, diags
-    world, errs = validate_as(doc, World)
-    diags += errs
+    world, errs = _guarded(doc, lambda: validate_as(doc, World), _NOTHING)
+    diags += errs + doc.problems
     if world is not None:
         ids = [o.id for o in world.objects]
         for i, obj in enumerate(world.objects):
             if ids.index(obj.id) != i:
                 diags.append(doc.diagnostic(("objects", i, "id"), f"duplicate world object id '{obj.id}'"))
     return (world if not diags else None), diags
+
+
+def validate_world_file(path: Path) -> tuple[World | None, list[Diagnostic]]:
+    """Validate a world file."""
+    return _validate_world_doc(read_yaml(path))
+
+
+def _looks_like_world(doc: Located) -> bool:
+    """Whether a parsed document is meant as a world: a mapping whose keys are mostly a world's. A file that
+    does not parse counts as one (its syntax diagnostics quote none of it)."""
+    if doc.data is None:
+        return True
+    if not isinstance(doc.data, dict) or not doc.data:
+        return False
+    known = sum(1 for key in doc.data if key in World.model_fields)
+    return known > 0 and 2 * known >= len(doc.data)
+
+
+def _check_world(doc: Located, path: Path, world: str) -> tuple[Path | None, list[Diagnostic]]:
+    """The world file a mission names: its absolute path if it is usable, and its problems. A file that is not
+    a world gets one diagnostic at the mission's `world:` key naming its path, never quoting its content."""
+    world_path = resolve_world_path(path, world)
+    if not world_path.exists() and not world_path.is_symlink():
+        return None, [doc.diagnostic(("world",), f"world file '{world}' not found (looked at {world_path})")]
+    try:
+        text = read_bounded(world_path)
+    except UnreadableFile as exc:
+        return None, [doc.diagnostic(("world",), f"world file '{world}' cannot be used: {exc}")]
+    world_doc = parse_yaml(text, str(world_path))
+    if not _looks_like_world(world_doc):
+        return None, [doc.diagnostic(("world",), f"'{world}' is not a world file (expected a mapping with "
+                                                 f"`name` and `seabed`; looked at {world_path})")]
+    _, diags = _validate_world_doc(world_doc)
+    return world_path, diags
 
 
 def _check_models(doc: Located, path: Path, environment: bool) -> tuple[dict[int, str], list[Diagnostic]]:
@@ -127,7 +198,7 @@ def _check_models(doc: Located, path: Path, environment: bool) -> tuple[dict[int
         model_path = resolve_world_path(path, model)
         if not environment:
             paths[i] = str(model_path)
-        elif not model_path.is_file():
+        elif not model_path.exists() and not model_path.is_symlink():
             diags.append(doc.diagnostic(("objects", i, "model"),
                                         f"model file '{model}' not found (looked at {model_path})"))
         else:
@@ -140,18 +211,21 @@ def _check_models(doc: Located, path: Path, environment: bool) -> tuple[dict[int
 
 
 def model_file_problem(path: Path) -> str:
-    """Why a multi-view model file cannot be used ('' when it can): unreadable, not YAML, or not a model.
-    Only the file's header is checked here; its views are read when a plug-in loads it."""
-    import yaml
-
+    """Why a multi-view model file cannot be used ('' when it can): unreadable, not YAML, or not a model; read
+    under the same bounds as missions, and never quoting the file. Only the file's header is checked here; its
+    views are read when a plug-in loads it."""
     try:
-        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
-        return f"cannot read it ({type(exc).__name__})"
+        model_doc = parse_yaml(read_bounded(path), str(path))
+    except UnreadableFile as exc:
+        return str(exc)
+    if model_doc.data is None and model_doc.problems:
+        first = model_doc.problems[0]
+        return f"it is not a valid YAML document (line {first.line}, column {first.col})"
+    data = model_doc.data
     expected = "auv-multiview-model/1"
-    if not isinstance(doc, dict) or doc.get("format") != expected:
+    if not isinstance(data, dict) or data.get("format") != expected:
         return f"not a multi-view model (expected `format: {expected}`)"
-    if not isinstance(doc.get("views"), list) or not doc["views"]:
+    if not isinstance(data.get("views"), list) or not data["views"]:
         return "the model has no views"
     return ""
 
@@ -166,25 +240,23 @@ def validate_mission_file(path: str | Path, environment: bool = True) -> tuple[M
     doc = read_yaml(path)
     diags = list(doc.problems) + _mapping_document(doc, "mission")
     if doc.data is None or not isinstance(doc.data, dict):
-        return None, diags
-    mission, errs = validate_as(doc, Mission)
+        return None, _capped(diags)
+    parsed = len(doc.problems)
+    mission, errs = _guarded(doc, lambda: validate_as(doc, Mission), _NOTHING)
     diags += errs
-    parts = _parts(doc) if mission is None else Parts(
+    parts = _guarded(doc, lambda: _parts(doc), Parts()) if mission is None else Parts(
         mission.safety, mission.sensors, mission.plugins, mission.home,
-        list(enumerate(mission.objects)), list(enumerate(mission.route)))
-    diags += cross_check(doc, parts)
+        list(enumerate(mission.objects)), list(enumerate(mission.route)), vehicle=mission.vehicle)
+    diags += _guarded(doc, lambda: cross_check(doc, parts), list[Diagnostic]())
+    diags += doc.problems[parsed:]
     if environment:
         diags += _check_plugins(doc, parts.plugins)
     world = doc.data.get("world")
     if isinstance(world, str) and environment:
-        world_path = resolve_world_path(path, world)
-        if not world_path.is_file():
-            diags.append(doc.diagnostic(("world",), f"world file '{world}' not found (looked at {world_path})"))
-        else:
-            _, world_errs = validate_world_file(world_path)
-            diags += world_errs
-            if mission is not None:
-                mission = mission.model_copy(update={"world": str(world_path)})
+        world_path, world_errs = _check_world(doc, path, world)
+        diags += world_errs
+        if mission is not None and world_path is not None:
+            mission = mission.model_copy(update={"world": str(world_path)})
     elif isinstance(world, str) and mission is not None:
         world_path = resolve_world_path(path, world)
         mission = mission.model_copy(update={"world": str(world_path) if world_path.is_file() else None})
@@ -197,7 +269,10 @@ def validate_mission_file(path: str | Path, environment: bool = True) -> tuple[M
     if mission is not None:
         mission._source = str(path)
     errors = [d for d in diags if not d.warning]
-    return (mission if not errors else None), sorted(set(diags), key=lambda d: (d.file, d.line, d.col, d.message))
+    if mission is not None and not errors:
+        valid = mission
+        diags += _guarded(doc, lambda: duration_warning(doc, valid), list[Diagnostic]())
+    return (mission if not errors else None), _capped(diags)
 
 
 def load_mission(path: str | Path, environment: bool = True) -> Mission:

@@ -14,10 +14,19 @@ import pydantic
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
 from mission import geodesy
+from mission.language import limits as L
 from mission.language.units import Duration, Percent
 
-Vec2 = tuple[float, float]
-Vec3 = tuple[float, float, float]
+
+def between(low: float, high: float, *, open_low: bool = False) -> Any:
+    """A field constraint `low ≤ x ≤ high` (`low < x` with `open_low`): every number of the language is finite
+    and lies in a range a vehicle or a world can have (`mission.language.limits`)."""
+    return Field(gt=low, le=high) if open_low else Field(ge=low, le=high)
+
+
+Coordinate = Annotated[float, between(-L.MAX_EXTENT, L.MAX_EXTENT)]  # north, east (m) in the local frame
+Vec2 = tuple[Coordinate, Coordinate]
+Vec3 = tuple[Coordinate, Coordinate, Coordinate]
 
 
 def _unplaced_geodetic(value: object) -> object:
@@ -32,6 +41,8 @@ def _unplaced_geodetic(value: object) -> object:
 _GEODETIC_SCHEMA = {"type": "object", "additionalProperties": False, "required": ["lat", "lon"],
                     "properties": {"lat": {"type": "number", "minimum": -90, "maximum": 90},
                                    "lon": {"type": "number", "minimum": -180, "maximum": 180}}}
+
+
 def _or_geodetic(schema: dict[str, Any]) -> None:
     local = dict(schema)
     schema.clear()
@@ -42,11 +53,24 @@ def _or_geodetic(schema: dict[str, Any]) -> None:
 PlanePoint = Annotated[Vec2, pydantic.BeforeValidator(_unplaced_geodetic), pydantic.WithJsonSchema({"anyOf": [
     {"type": "array", "prefixItems": [{"type": "number"}, {"type": "number"}], "minItems": 2, "maxItems": 2},
     _GEODETIC_SCHEMA]})]
-Polygon = Annotated[list[PlanePoint], Field(min_length=3, description="[[north, east], ...] in metres, or "
-                                                                      "{lat, lon} points (degrees, WGS84)")]
-Identifier = Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.\-]+$")]
+Polygon = Annotated[list[PlanePoint], Field(min_length=3, max_length=L.MAX_POLYGON_VERTICES,
+                                            description="[[north, east], ...] in metres, or {lat, lon} points "
+                                                        "(degrees, WGS84)")]
+Identifier = Annotated[str, Field(min_length=1, max_length=200, pattern=r"^[A-Za-z0-9_.\-]+$")]
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
+Depth = Annotated[float, between(0.0, L.MAX_DEPTH_M)]  # below the surface (m)
+ObjectDepth = Annotated[float, between(-L.MAX_DEPTH_M, L.MAX_DEPTH_M)]  # of an object frame's origin (m)
+Altitude = Annotated[float, between(0.0, L.MAX_ALTITUDE)]
+Angle = Annotated[float, between(-L.MAX_HEADING, L.MAX_HEADING)]  # degrees
+Speed = Annotated[float, between(L.MIN_SPEED, L.MAX_SPEED)]  # m/s
+Rate = Annotated[float, between(L.MIN_RATE_HZ, L.MAX_RATE_HZ)]  # Hz
+Range = Annotated[float, between(0.1, L.MAX_RANGE)]  # of a sensor (m)
+Size = Annotated[float, between(0.001, L.MAX_SIZE)]  # of an object or a part (m)
+Distance = Annotated[float, between(0.1, L.MAX_SIZE)]  # a standoff, a capture radius (m)
+Sigma = Annotated[float, between(0.0, 100.0)]
+Seed = Annotated[int, between(0, L.MAX_SEED)]
+Time = Annotated[Duration, Field(le=L.MAX_DURATION_S)]  # a duration of at most a week
 
 
 class Strict(BaseModel):
@@ -56,32 +80,32 @@ class Strict(BaseModel):
 class Origin(Strict):
     """Geodetic origin (WGS84 degrees) of the local NED frame: exports and `{lat, lon}` points need it."""
 
-    lat: Annotated[float, Field(ge=-90, le=90)]
-    lon: Annotated[float, Field(ge=-180, le=180)]
+    lat: Annotated[float, between(-90, 90)]
+    lon: Annotated[float, between(-180, 180)]
 
 
 class Home(Strict):
     """The launch point, in the local frame. `transit: {to: home}` returns here."""
 
-    north: float = 0.0
-    east: float = 0.0
-    depth: NonNegative = 0.0
-    heading: float = 0.0
+    north: Coordinate = 0.0
+    east: Coordinate = 0.0
+    depth: Depth = 0.0
+    heading: Angle = 0.0
 
 
 class VehicleSettings(Strict):
     """The mission's `vehicle:` section: the limits and energy of the vehicle (the vehicle itself, simulated or
     real, is `mission.vehicle.VehicleInterface`)."""
 
-    max_speed: Positive = 2.0
-    cruise_speed: Positive = 1.5
-    max_acceleration: Positive = 0.2
-    max_yaw_rate: Positive = 15.0
-    max_vertical_speed: Positive = 0.5
-    turn_radius: NonNegative = 6.0
-    energy_wh: Positive = 4000.0
-    hotel_power_w: NonNegative = 60.0
-    propulsion_power_w: NonNegative = 180.0
+    max_speed: Speed = 2.0
+    cruise_speed: Speed = 1.5
+    max_acceleration: Annotated[float, between(0.001, L.MAX_ACCELERATION)] = 0.2
+    max_yaw_rate: Annotated[float, between(L.MIN_YAW_RATE, L.MAX_YAW_RATE)] = 15.0
+    max_vertical_speed: Annotated[float, between(L.MIN_VERTICAL_SPEED, L.MAX_VERTICAL_SPEED)] = 0.5
+    turn_radius: Annotated[float, between(0.0, L.MAX_SIZE)] = 6.0
+    energy_wh: Annotated[float, between(1.0, L.MAX_ENERGY_WH)] = 4000.0
+    hotel_power_w: Annotated[float, between(0.0, L.MAX_POWER_W)] = 60.0
+    propulsion_power_w: Annotated[float, between(0.0, L.MAX_POWER_W)] = 180.0
 
     @field_validator("cruise_speed")
     @classmethod
@@ -96,37 +120,37 @@ Vehicle = VehicleSettings  # the same model under its short name (`Mission.vehic
 
 
 class Mbes(Strict):
-    beams: Annotated[int, Field(ge=2)] = 256
-    swath_deg: Annotated[float, Field(gt=0, lt=180)] = 120.0
-    max_range: Positive = 80.0
-    rate_hz: Positive = 10.0
-    range_sigma: NonNegative = 0.05
+    beams: Annotated[int, between(2, L.MAX_BEAMS)] = 256
+    swath_deg: Annotated[float, Field(ge=1, lt=180)] = 120.0
+    max_range: Range = 80.0
+    rate_hz: Rate = 10.0
+    range_sigma: Annotated[float, between(0.0, 10.0)] = 0.05
 
 
 class Stereo(Strict):
-    width: Annotated[int, Field(ge=16)] = 1200
-    height: Annotated[int, Field(ge=16)] = 900
-    fx: Positive = 1000.0
-    baseline: Positive = 0.25
-    rate_hz: Positive = 10.0
-    max_range: Positive = 8.0
+    width: Annotated[int, between(16, L.MAX_IMAGE_SIDE)] = 1200
+    height: Annotated[int, between(16, L.MAX_IMAGE_SIDE)] = 900
+    fx: Annotated[float, between(1.0, 1.0e5)] = 1000.0
+    baseline: Annotated[float, between(0.001, 10.0)] = 0.25
+    rate_hz: Rate = 10.0
+    max_range: Range = 8.0
 
 
 class Scanner(Strict):
-    fov_deg: tuple[Annotated[float, Field(gt=0, lt=180)], Annotated[float, Field(gt=0, lt=180)]] = (60.0, 45.0)
-    max_range: Positive = 12.0
-    rate_hz: Positive = 2.0
+    fov_deg: tuple[Annotated[float, Field(ge=1, lt=180)], Annotated[float, Field(ge=1, lt=180)]] = (60.0, 45.0)
+    max_range: Range = 12.0
+    rate_hz: Rate = 2.0
 
 
 class Usbl(Strict):
-    sigma: NonNegative = 1.5
-    rate_hz: Positive = 0.5
+    sigma: Sigma = 1.5
+    rate_hz: Rate = 0.5
 
 
 class Dvl(Strict):
-    drift_percent: NonNegative = 0.5
-    velocity_sigma: NonNegative = 0.01
-    max_altitude: Positive = 100.0
+    drift_percent: Annotated[float, between(0.0, 100.0)] = 0.5
+    velocity_sigma: Annotated[float, between(0.0, 10.0)] = 0.01
+    max_altitude: Annotated[float, between(0.1, L.MAX_ALTITUDE)] = 100.0
 
 
 class Sensors(Strict):
@@ -145,9 +169,9 @@ class Plugins(Strict):
 
 
 class AbortTo(Strict):
-    north: float
-    east: float
-    depth: NonNegative = 0.0
+    north: Coordinate
+    east: Coordinate
+    depth: Depth = 0.0
 
 
 class OnViolation(Strict):
@@ -159,45 +183,56 @@ class OnViolation(Strict):
 
 class Safety(Strict):
     geofence: Polygon | None = None
-    max_depth: Positive = 300.0
-    min_altitude: NonNegative = 1.0
-    max_duration: Duration = 6 * 3600.0
+    max_depth: Annotated[float, between(0.0, L.MAX_DEPTH_M, open_low=True)] = 300.0
+    min_altitude: Altitude = 1.0
+    max_duration: Annotated[Time, Field(ge=1.0)] = 6 * 3600.0  # the route stops here (the abort then has abort_time)
+    abort_time: Annotated[Time, Field(ge=1.0)] = 1800.0  # the longest an abort may run past max_duration
     energy_reserve: Percent = 20.0
     on_violation: OnViolation = OnViolation()
-    link_timeout: Duration = 3.0  # onboard: no heartbeat from the vehicle for this long is a lost link
+    # onboard: no heartbeat from the vehicle for this long is a lost link
+    # onboard: no heartbeat from the vehicle for this long is a lost link
+    link_timeout: Annotated[Duration, Field(ge=0.1, le=L.MAX_LINK_TIMEOUT_S)] = 3.0
 
 
 class Pose(Strict):
     """Pose of an object frame in the world: position of its origin and heading of its x-axis."""
 
-    north: float
-    east: float
-    depth: float
-    heading: float = 0.0
+    north: Coordinate
+    east: Coordinate
+    depth: ObjectDepth
+    heading: Angle = 0.0
 
 
 class PointSet(Strict):
     id: Identifier
-    points: list[Vec3]
+    points: Annotated[list[Vec3], Field(max_length=L.MAX_POINTS_PER_SET)]
 
 
 class Target(Strict):
     id: Identifier
     at: Vec3
     reference: Identifier
-    standoff: Positive = 2.0
-    photos: Annotated[int, Field(ge=1)] = 1
+    standoff: Distance = 2.0
+    photos: Annotated[int, between(1, L.MAX_PHOTOS)] = 1
 
 
 class KnownObject(Strict):
     id: Identifier
     description: str = ""
     pose: Pose
-    size: tuple[Positive, Positive, Positive]
-    characteristic_points: list[PointSet] = []
-    targets: list[Target] = []
+    size: tuple[Size, Size, Size]
+    characteristic_points: Annotated[list[PointSet], Field(max_length=L.MAX_POINT_SETS)] = []
+    targets: Annotated[list[Target], Field(max_length=L.MAX_TARGETS)] = []
     model: str | None = Field(None, description="multi-view model file (`auv model build`), relative to the "
                                                 "mission file; the loader resolves it to an absolute path")
+
+    @model_validator(mode="after")
+    def _points_within_limit(self) -> KnownObject:
+        count = sum(len(s.points) for s in self.characteristic_points)
+        if count > L.MAX_POINTS_PER_OBJECT:
+            raise ValueError(f"object '{self.id}' has {count} characteristic points (at most "
+                             f"{L.MAX_POINTS_PER_OBJECT} in all its sets)")
+        return self
 
 
 class Point(Strict):
@@ -205,8 +240,8 @@ class Point(Strict):
 
     model_config = ConfigDict(json_schema_extra=lambda schema: _or_geodetic(schema))
 
-    north: float
-    east: float
+    north: Coordinate
+    east: Coordinate
 
     @model_validator(mode="before")
     @classmethod
@@ -218,11 +253,11 @@ class Transit(Strict):
     """Go to a point (or home) at a depth or an altitude; with neither, keep the current depth."""
 
     to: Literal["home"] | Point
-    depth: NonNegative | None = None
-    altitude: NonNegative | None = None
-    speed: Positive | None = None
+    depth: Depth | None = None
+    altitude: Altitude | None = None
+    speed: Speed | None = None
     navigation: Literal["usbl", "dead-reckoning"] = "usbl"
-    capture_radius: Positive = 3.0
+    capture_radius: Distance = 3.0
 
     @model_validator(mode="after")
     def _depth_or_altitude(self) -> Transit:
@@ -233,20 +268,20 @@ class Transit(Strict):
 
 class Survey(Strict):
     area: Polygon
-    exclude: list[Polygon] = []
+    exclude: Annotated[list[Polygon], Field(max_length=L.MAX_EXCLUSION_ZONES)] = []
     sensor: Literal["mbes"] = "mbes"
-    altitude: Positive
-    overlap: Percent = 20.0
+    altitude: Annotated[float, between(0.1, L.MAX_ALTITUDE)]
+    overlap: Annotated[Percent, Field(le=90)] = 20.0
     pattern: Literal["meander"] = "meander"
-    heading: float | Literal["auto"] = "auto"
-    speed: Positive | None = None
-    resolution: Annotated[float, Field(gt=0, le=5)] = 0.5  # voxel size of the occupancy map (m)
+    heading: Angle | Literal["auto"] = "auto"
+    speed: Speed | None = None
+    resolution: Annotated[float, between(L.MIN_RESOLUTION, 5.0)] = 0.5  # voxel size of the occupancy map (m)
 
 
 class Weights(Strict):
-    distance: NonNegative = 0.3
-    frontier: NonNegative = 0.5
-    contour: NonNegative = 0.2
+    distance: Annotated[float, between(0.0, 1000.0)] = 0.3
+    frontier: Annotated[float, between(0.0, 1000.0)] = 0.5
+    contour: Annotated[float, between(0.0, 1000.0)] = 0.2
 
 
 class Explore(Strict):
@@ -254,13 +289,13 @@ class Explore(Strict):
     sensor: Literal["scanner", "stereo", "mbes"] = "scanner"
     planner: Literal["next-best-view", "rrt-photo"] = "next-best-view"
     weights: Weights = Weights()
-    safe_distance: Positive = 5.0
-    budget: Duration = 900.0
+    safe_distance: Distance = 5.0
+    budget: Time = 900.0
 
 
 class Search(Strict):
     pattern: Literal["expanding-square", "lawnmower"] = "expanding-square"
-    budget: Duration = 300.0
+    budget: Time = 300.0
 
 
 class Inspect(Strict):
@@ -280,10 +315,11 @@ class Reference(Strict):
     point_sets: Literal["all"] | list[Identifier] = "all"
     altitude: Annotated[float, Field(gt=0.5, le=20)] = 3.6  # of the final, precise referencing
     search_altitude: Annotated[float, Field(gt=0.5, le=30)] = 6.0  # while searching: a wider view
-    offsets: list[Vec2] = [(0.0, 0.0), (1.5, 0.0), (-1.5, 0.0), (0.0, 1.5), (0.0, -1.5),
-                           (1.5, 1.5), (1.5, -1.5), (-1.5, 1.5), (-1.5, -1.5)]  # north, east (m) around each set
+    offsets: Annotated[list[Vec2], Field(max_length=L.MAX_OFFSETS)] = [  # north, east (m) around each set
+        (0.0, 0.0), (1.5, 0.0), (-1.5, 0.0), (0.0, 1.5), (0.0, -1.5),
+        (1.5, 1.5), (1.5, -1.5), (-1.5, 1.5), (-1.5, -1.5)]
     tolerance: Annotated[float, Field(gt=0, le=1)] = 0.05
-    settle: Duration = 3.0
+    settle: Time = 3.0
 
 
 Action = Literal["map", "detect_objects", "photograph", "model", "record"]
@@ -299,8 +335,8 @@ class RouteElement(Strict):
     explore: Explore | None = None
     inspect: Inspect | None = None
     reference: Reference | None = None
-    actions: list[Action] = []
-    timeout: Duration | None = None
+    actions: Annotated[list[Action], Field(max_length=20)] = []
+    timeout: Annotated[Time, Field(gt=0)] | None = None
     on_failure: Literal["continue", "abort"] = "continue"
     priority: Annotated[int, Field(ge=-100, le=100)] = 0  # when the budget falls short, the lowest is dropped first
 
@@ -336,15 +372,15 @@ class Mission(Strict):
     description: str = ""
     origin: Origin | None = None  # required by exports and by `{lat, lon}` points; never assumed
     world: str | None = None
-    seed: int = 0
+    seed: Seed = 0
     home: Home = Home()
     vehicle: VehicleSettings = VehicleSettings()
     sensors: Sensors = Sensors()
     plugins: Plugins = Plugins()
     safety: Safety = Safety()
     strategy: Strategy = Strategy()
-    objects: list[KnownObject] = []
-    route: Annotated[list[RouteElement], Field(min_length=1)]
+    objects: Annotated[list[KnownObject], Field(max_length=L.MAX_OBJECTS)] = []
+    route: Annotated[list[RouteElement], Field(min_length=1, max_length=L.MAX_ROUTE_ELEMENTS)]
     _source: str | None = PrivateAttr(default=None)
 
     @model_validator(mode="before")

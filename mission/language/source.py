@@ -14,9 +14,10 @@ from typing import Any
 import yaml
 
 from mission.errors import Diagnostic
+from mission.language.composer import LimitExceeded, compose_bounded
+from mission.language.reading import UnreadableFile, read_bounded
 
 PathKey = tuple[str | int, ...]
-_SCALARS = yaml.constructor.SafeConstructor()
 
 
 @dataclass
@@ -50,12 +51,20 @@ def _position(node: yaml.Node) -> tuple[int, int]:
     return node.start_mark.line + 1, node.start_mark.column + 1
 
 
-def _build(doc: Located, node: yaml.Node, path: PathKey) -> Any:
+def _scalar(scalars: yaml.constructor.SafeConstructor, node: yaml.Node) -> Any:
+    try:
+        return scalars.construct_object(node)
+    except (ValueError, OverflowError) as exc:  # e.g. a timestamp with a month 13
+        raise yaml.constructor.ConstructorError(None, None, f"this value cannot be read ({type(exc).__name__})",
+                                                node.start_mark) from None
+
+
+def _build(doc: Located, node: yaml.Node, path: PathKey, scalars: yaml.constructor.SafeConstructor) -> Any:
     doc.value_at[path] = _position(node)
     if isinstance(node, yaml.MappingNode):
         out: dict[Any, Any] = {}
         for key_node, value_node in node.value:
-            key = _build(doc, key_node, path + ("<key>",))
+            key = _build(doc, key_node, path + ("<key>",), scalars)
             if not isinstance(key, (str, int, float, bool)) or key is None:
                 doc.problems.append(Diagnostic(doc.file, *_position(key_node),
                                                "a mapping key must be a string or a number"))
@@ -67,12 +76,12 @@ def _build(doc: Located, node: yaml.Node, path: PathKey) -> Any:
                     Diagnostic(doc.file, *_position(key_node), f"duplicate key '{key}' (first on line {first})"))
                 continue
             doc.key_at[path + (key,)] = _position(key_node)
-            out[key] = _build(doc, value_node, path + (key,))
+            out[key] = _build(doc, value_node, path + (key,), scalars)
         doc.value_at.pop(path + ("<key>",), None)
         return out
     if isinstance(node, yaml.SequenceNode):
-        return [_build(doc, item, path + (i,)) for i, item in enumerate(node.value)]
-    return _SCALARS.construct_object(node)
+        return [_build(doc, item, path + (i,), scalars) for i, item in enumerate(node.value)]
+    return _scalar(scalars, node)
 
 
 def _syntax_diagnostic(exc: yaml.MarkedYAMLError, file: str) -> Diagnostic:
@@ -96,22 +105,40 @@ def _syntax_diagnostic(exc: yaml.MarkedYAMLError, file: str) -> Diagnostic:
     return Diagnostic(file, line, col, message)
 
 
+def _position_of(text: str, index: int) -> tuple[int, int]:
+    """1-based line and column of a character index."""
+    index = max(0, min(index, len(text)))
+    line = text.count("\n", 0, index) + 1
+    return line, index - (text.rfind("\n", 0, index) + 1) + 1
+
+
 def parse_yaml(text: str, file: str) -> Located:
-    """Parse one YAML document; syntax errors become diagnostics, never exceptions."""
+    """Parse one YAML document under the limits of `mission.language.limits`; every failure becomes a located
+    diagnostic, never an exception."""
     doc = Located(file=file, data=None)
     try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
+        node = compose_bounded(text)
+    except LimitExceeded as exc:
+        mark = exc.problem_mark
+        line, col = (mark.line + 1, mark.column + 1) if mark is not None else (1, 1)
+        doc.problems.append(Diagnostic(file, line, col, f"document refused: {exc.problem}"))
+        return doc
     except yaml.MarkedYAMLError as exc:
         doc.problems.append(_syntax_diagnostic(exc, file))
         return doc
+    except yaml.reader.ReaderError as exc:
+        line, col = _position_of(text, exc.position)
+        doc.problems.append(Diagnostic(file, line, col, f"YAML error: character {exc.character!r} is not allowed "
+                                                        f"in a YAML document ({exc.reason})"))
+        return doc
     except yaml.YAMLError as exc:
-        doc.problems.append(Diagnostic(file, 1, 1, f"YAML error: {exc}"))
+        doc.problems.append(Diagnostic(file, 1, 1, f"YAML error: {type(exc).__name__}"))
         return doc
     if node is None:
         doc.problems.append(Diagnostic(file, 1, 1, "the document is empty; expected a mapping"))
         return doc
     try:
-        doc.data = _build(doc, node, ())
+        doc.data = _build(doc, node, (), yaml.constructor.SafeConstructor())
     except yaml.constructor.ConstructorError as exc:
         mark = exc.problem_mark
         line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
@@ -123,11 +150,12 @@ def parse_yaml(text: str, file: str) -> Located:
 
 
 def read_yaml(path: Path) -> Located:
-    """Read and parse a YAML file; an unreadable file is one diagnostic at 1:1."""
+    """Read (under `mission.language.reading`'s bounds) and parse a YAML file; a file that cannot or may not be
+    read is one diagnostic at 1:1."""
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
+        text = read_bounded(path)
+    except UnreadableFile as exc:
         doc = Located(file=str(path), data=None)
-        doc.problems.append(Diagnostic(str(path), 1, 1, f"cannot read file: {exc}"))
+        doc.problems.append(Diagnostic(str(path), 1, 1, f"cannot read the file: {exc}"))
         return doc
     return parse_yaml(text, str(path))

@@ -54,11 +54,13 @@ def _model_at(root: type[BaseModel], loc: tuple[Any, ...]) -> type[BaseModel] | 
     return current[0] if current else None
 
 
-def _split_loc(data: Any, loc: tuple[Any, ...], error_type: str) -> tuple[PathKey, int | None, int]:
-    """Data path of an error location, where in it the last union tag stood (None: no tag), and the depth
-    reached after that tag (deeper means the branch that matched the value's shape)."""
+def _split_loc(data: Any, loc: tuple[Any, ...], error_type: str) -> tuple[PathKey, int | None, int, tuple[Any, ...]]:
+    """Data path of an error location, where in it the last union tag stood (None: no tag), the depth reached
+    after that tag (deeper means the branch that matched the value's shape), and the branch (`loc` up to the
+    tag)."""
     path: list[str | int] = []
     site: int | None = None
+    branch: tuple[Any, ...] = ()
     node = data
     for k, part in enumerate(loc):
         last = k == len(loc) - 1
@@ -71,9 +73,9 @@ def _split_loc(data: Any, loc: tuple[Any, ...], error_type: str) -> tuple[PathKe
         elif last and error_type == "missing":
             path.append(part)
         else:
-            site = len(path)
+            site, branch = len(path), loc[:k + 1]
     depth = len(path) - site if site is not None else 0
-    return tuple(path), site, depth
+    return tuple(path), site, depth, branch
 
 
 def _message(error: dict[str, Any]) -> str:
@@ -120,16 +122,19 @@ def diagnostics_from(exc: ValidationError, doc: Located, model: type[BaseModel],
     entries = []
     for raw in exc.errors():
         err: dict[str, Any] = dict(raw)
-        path, site, depth = _split_loc(data, tuple(err["loc"]), err["type"])
-        entries.append((err, path, site, depth))
-    # Of a union's branches, keep the one that got furthest into the value (the shape the author meant).
-    best: dict[PathKey, int] = {}
-    for _, path, site, depth in entries:
+        path, site, depth, branch = _split_loc(data, tuple(err["loc"]), err["type"])
+        entries.append((err, path, site, depth, branch))
+    # Of a union's branches, keep the one that got furthest into the value (the shape the author meant), with
+    # every error of that branch.
+    deepest: dict[PathKey, int] = {}
+    for _, path, site, depth, _ in entries:
         if site is not None:
-            best[path[:site]] = max(best.get(path[:site], 0), depth)
+            deepest[path[:site]] = max(deepest.get(path[:site], 0), depth)
+    best = {(path[:site], branch) for _, path, site, depth, branch in entries
+            if site is not None and depth == deepest[path[:site]]}
     grouped: dict[PathKey, list[dict[str, Any]]] = {}
-    for err, path, site, depth in entries:
-        if site is None or depth == best[path[:site]]:
+    for err, path, site, _, branch in entries:
+        if site is None or (path[:site], branch) in best:
             grouped.setdefault(path, []).append(err)
     out: list[Diagnostic] = []
     short: dict[PathKey, int] = {}

@@ -10,39 +10,44 @@ truth belongs to the world alone; `database` names the mission-database object i
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from mission.language.models import Identifier, NonNegative, Positive, Strict, Vec3
+from mission.language import limits as L
+from mission.language.models import Angle, Coordinate, Identifier, ObjectDepth, Seed, Size, Strict, Vec3, between
+
+Fraction = Annotated[float, between(0.0, 1.0)]
+Color = tuple[Fraction, Fraction, Fraction]
 
 
 class Roughness(Strict):
-    amplitude: NonNegative = 0.3
-    wavelength: Positive = 20.0
-    seed: int = 0
+    amplitude: Annotated[float, between(0.0, 100.0)] = 0.3
+    wavelength: Annotated[float, between(0.01, 1.0e5)] = 20.0
+    seed: Seed = 0
 
 
 class Texture(Strict):
     """Procedural seabed texture for the cameras."""
 
     kind: Literal["sand", "mud", "gravel", "rock"] = "sand"
-    seed: int = 0
-    scale: Positive = 1.0
+    seed: Seed = 0
+    scale: Annotated[float, between(0.001, 1000.0)] = 1.0
 
 
 class Slope(Strict):
     """Depth gradient in metres of depth per metre travelled north / east."""
 
-    north: float = 0.0
-    east: float = 0.0
+    north: Annotated[float, between(-10.0, 10.0)] = 0.0
+    east: Annotated[float, between(-10.0, 10.0)] = 0.0
 
 
 class Seabed(Strict):
-    north: tuple[float, float]
-    east: tuple[float, float]
-    resolution: Positive = 1.0
-    mean_depth: Positive
+    north: tuple[Coordinate, Coordinate]
+    east: tuple[Coordinate, Coordinate]
+    resolution: Annotated[float, between(L.MIN_RESOLUTION, L.MAX_RESOLUTION)] = 1.0
+    mean_depth: Annotated[float, between(0.1, L.MAX_DEPTH_M)]
     slope: Slope = Slope()
     roughness: Roughness = Roughness()
     texture: Texture = Texture()
@@ -51,52 +56,61 @@ class Seabed(Strict):
     def _extent_ordered(self) -> Seabed:
         if self.north[0] >= self.north[1] or self.east[0] >= self.east[1]:
             raise ValueError("seabed extents must be [min, max] with min < max")
-        cells = (self.north[1] - self.north[0]) * (self.east[1] - self.east[0]) / self.resolution**2
-        if cells > 25e6:
-            raise ValueError(f"seabed grid of {cells:.0f} cells is too large; use a coarser resolution")
+        rows = (self.north[1] - self.north[0]) / self.resolution + 1
+        cols = (self.east[1] - self.east[0]) / self.resolution + 1
+        cells = rows * cols
+        if cells > L.MAX_SEABED_CELLS:
+            raise ValueError(f"a seabed grid of {cells:.3g} cells is too large (at most {L.MAX_SEABED_CELLS:,}); "
+                             "use a coarser resolution or a smaller extent")
+        taps = 8.0 * self.roughness.wavelength / (2.0 * math.pi * self.resolution) + 1.0  # the roughness filter
+        if self.roughness.amplitude > 0 and cells * taps > L.MAX_ROUGHNESS_WORK:
+            raise ValueError(f"roughness.wavelength {self.roughness.wavelength:g} m is too long for a grid of "
+                             f"{cells:.3g} cells at {self.resolution:g} m (filtering it would take too long)")
         return self
 
 
 class Current(Strict):
-    north: float = 0.0
-    east: float = 0.0
+    """The water current (m/s), uniform over the world."""
+
+    north: Annotated[float, between(-L.MAX_CURRENT, L.MAX_CURRENT)] = 0.0
+    east: Annotated[float, between(-L.MAX_CURRENT, L.MAX_CURRENT)] = 0.0
 
 
 class TruePose(Strict):
-    north: float
-    east: float
-    depth: float
-    heading: float = 0.0
-    pitch: float = 0.0
-    roll: float = 0.0
+    north: Coordinate
+    east: Coordinate
+    depth: ObjectDepth
+    heading: Angle = 0.0
+    pitch: Angle = 0.0
+    roll: Angle = 0.0
 
 
 class Offset(Strict):
     """How the truth differs from the database pose: a shift (m), a rotation about z and a tilt (deg)."""
 
-    north: float = 0.0
-    east: float = 0.0
-    depth: float = 0.0
-    heading: float = 0.0
-    pitch: float = 0.0
-    roll: float = 0.0
+    north: Annotated[float, between(-L.MAX_SIZE, L.MAX_SIZE)] = 0.0
+    east: Annotated[float, between(-L.MAX_SIZE, L.MAX_SIZE)] = 0.0
+    depth: Annotated[float, between(-L.MAX_SIZE, L.MAX_SIZE)] = 0.0
+    heading: Angle = 0.0
+    pitch: Angle = 0.0
+    roll: Angle = 0.0
 
 
 class Box(Strict):
     shape: Literal["box"]
-    size: tuple[Positive, Positive, Positive]
+    size: tuple[Size, Size, Size]
     at: Vec3 = (0.0, 0.0, 0.0)
-    heading: float = 0.0
-    color: tuple[float, float, float] = (0.6, 0.55, 0.2)
+    heading: Angle = 0.0
+    color: Color = (0.6, 0.55, 0.2)
 
 
 class Cylinder(Strict):
     shape: Literal["cylinder"]
-    radius: Positive
-    height: Positive
+    radius: Size
+    height: Size
     at: Vec3 = (0.0, 0.0, 0.0)
     axis: Literal["x", "y", "z"] = "z"
-    color: tuple[float, float, float] = (0.5, 0.5, 0.55)
+    color: Color = (0.5, 0.5, 0.55)
 
 
 Part = Annotated[Box | Cylinder, Field(discriminator="shape")]
@@ -109,7 +123,7 @@ class WorldObject(Strict):
     database: Identifier | None = None
     pose: TruePose
     offset: Offset = Offset()
-    parts: Annotated[list[Part], Field(min_length=1)]
+    parts: Annotated[list[Part], Field(min_length=1, max_length=L.MAX_WORLD_PARTS)]
 
 
 class World(Strict):
@@ -117,4 +131,4 @@ class World(Strict):
     description: str = ""
     seabed: Seabed
     current: Current = Current()
-    objects: list[WorldObject] = []
+    objects: Annotated[list[WorldObject], Field(max_length=L.MAX_OBJECTS)] = []

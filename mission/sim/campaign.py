@@ -138,9 +138,10 @@ def _run_one(mission_path: str, seed: int, out: str, plots: bool,
 
 def run_campaign(mission_path: str | Path, seeds: Sequence[int], out: str | Path, jobs: int = 1,
                  plots: bool = False, on_run: Callable[[dict[str, Any]], None] | None = None,
-                 plugin_latency_s: float | None = SIMULATED_LATENCY_S) -> dict[str, Any]:
+                 plugin_latency_s: float | None = SIMULATED_LATENCY_S, dask: str | None = None) -> dict[str, Any]:
     """Run `mission_path` once per seed (`jobs` processes at a time) into `out/seed-N/`; returns and writes
-    `out/campaign.json` (rewritten after every run)."""
+    `out/campaign.json` (rewritten after every run). With `dask` the runs are Dask tasks
+    (`mission.sim.dask_campaign`): "" starts a local cluster of `jobs` workers, an address uses that scheduler."""
     out_dir = Path(out)
     out_dir.mkdir(parents=True, exist_ok=True)
     rows: list[dict[str, Any]] = []
@@ -157,7 +158,11 @@ def run_campaign(mission_path: str | Path, seeds: Sequence[int], out: str | Path
             on_run(row)
 
     jobs = max(1, min(jobs, len(seeds)))
-    if jobs == 1:
+    if dask is not None:
+        from mission.sim.dask_campaign import dask_rows
+
+        dask_rows(_run_one, str(mission_path), seeds, out_dir, plots, plugin_latency_s, record, dask or None, jobs)
+    elif jobs == 1:
         for seed in seeds:
             record(_run_one(str(mission_path), seed, str(out_dir / f"seed-{seed}"), plots, plugin_latency_s))
     else:

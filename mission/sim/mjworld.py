@@ -43,7 +43,8 @@ from numpy.typing import NDArray
 from mission.frames import Array, rotation_zyx
 from mission.language.world import Box, Cylinder, Part
 from mission.sim.meshes import box_mesh, cylinder_mesh
-from mission.sim.textures import Appearance, object_albedo, seabed_albedo, to_bytes
+from mission.sim.texture_cache import object_texels, seabed_texels
+from mission.sim.textures import Appearance
 from mission.world.scene import PlacedObject, Scene
 from mission.world.terrain import HeightField
 
@@ -262,9 +263,8 @@ class MjWorld:
         if appearance is not None:
             a = appearance
             self._fill_tiles(a.tiling(scene.seabed.resolution)[0])
-            self._fill_texture("seabed", seabed_albedo(a.seabed, a.seabed_texels, a.seabed_tile_m))
-            grey = object_albedo(a.object_seed, a.object_texels, a.object_tile_m)
-            self._fill_texture("objects", np.repeat(grey[..., None], 3, axis=2))
+            self._fill_texture("seabed", seabed_texels(a.seabed, a.seabed_texels, a.seabed_tile_m))
+            self._fill_texture("objects", object_texels(a.object_seed, a.object_texels, a.object_tile_m))
         self.data = mujoco.MjData(self.model)
         mujoco.mj_kinematics(self.model, self.data)  # static geoms get their world poses in geom_xpos/xmat
         self.seabed_geom = int(self.model.geom("seabed").id)
@@ -295,11 +295,11 @@ class MjWorld:
         self.seabed_tile_geoms = np.array(ids, dtype=int)
         self.seabed_tile_centres, self.seabed_tile_radii = np.array(centres), np.array(radii)
 
-    def _fill_texture(self, name: str, rgb: NDArray[np.floating[Any]]) -> None:
+    def _fill_texture(self, name: str, rgb: NDArray[np.uint8]) -> None:
         tex = self.model.texture(name)
         adr, count = int(tex.adr[0]), int(tex.width[0] * tex.height[0] * tex.nchannel[0])
         assert rgb.size == count, (name, rgb.shape, count)
-        self.model.tex_data[adr:adr + count] = to_bytes(rgb).ravel()
+        self.model.tex_data[adr:adr + count] = rgb.ravel()
 
     def group_mask(self, seabed: bool = True, objects: bool = True) -> NDArray[np.uint8]:
         """The `geomgroup` argument of MuJoCo's ray functions: 1 = the group is seen."""

@@ -133,7 +133,7 @@ def _band_extent(uv: Array, v0: float, v1: float) -> tuple[float, float]:
     return (min(us), max(us)) if us else (0.0, -1.0)
 
 
-def _inside(uv: Array, pts: Array) -> NDArray[np.bool_]:
+def inside_polygon(uv: Array, pts: Array) -> NDArray[np.bool_]:
     """Even-odd point-in-polygon for points (N, 2) in the (u, v) frame."""
     inside = np.zeros(len(pts), dtype=bool)
     for a, b in zip(uv, np.roll(uv, -1, axis=0), strict=True):
@@ -153,7 +153,7 @@ def _band_information(uv: Array, info: InformationField, u_axis: Array, v_axis: 
     uu, vv = np.meshgrid(us, vs, indexing="ij")
     pts = np.stack([uu.ravel(), vv.ravel()], axis=1)
     ne = pts[:, :1] * u_axis + pts[:, 1:] * v_axis
-    values = np.where(_inside(uv, pts), info.normalised_at(ne), 0.0).reshape(uu.shape).max(axis=0)
+    values = np.where(inside_polygon(uv, pts), info.normalised_at(ne), 0.0).reshape(uu.shape).max(axis=0)
     return vs, values
 
 
