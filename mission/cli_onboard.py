@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from mission.cli_export import add_mcap_option, write_mcap_if_asked
-from mission.errors import MissionError
+from mission.errors import Diagnostic, MissionError
 from mission.interrupt import exit_code
 
 
@@ -29,8 +29,10 @@ def _run(args: argparse.Namespace) -> int:
 
         raise MissionError([faults_diagnostic(mission, "`auv run` flies a real vehicle")])
     out = Path(args.out) if args.out else Path("runs") / f"{mission.name}-onboard"
+    drivers = sensor_driver_options(mission, args.sensor_driver or [], args.mission)
     print(f"{mission.name}: connecting to {args.vehicle} (up to {args.connect_timeout:g} s)", file=sys.stderr)
-    result = run_onboard(mission, args.vehicle, out, connect_timeout=args.connect_timeout, force=args.force)
+    result = run_onboard(mission, args.vehicle, out, connect_timeout=args.connect_timeout, sensor_drivers=drivers,
+                         force=args.force)
     m = result.metrics
     state = "completed" if m["completed"] else ("LINK LOST" if m["link_lost"] else
                                                 "STOPPED" if m["stopped"] else
@@ -46,6 +48,23 @@ def _run(args: argparse.Namespace) -> int:
     if m.get("interrupted"):
         return exit_code(getattr(signal.Signals, m["signal"]))
     return 0 if m["completed"] else 1
+
+
+def sensor_driver_options(mission: Any, options: list[str], args_mission: str = "") -> dict[str, str]:
+    """`--sensor-driver` values → sensor name → driver URI (a bare URI applies to every sensor the mission has)."""
+    from mission.sensors import SENSOR_NAMES
+
+    drivers: dict[str, str] = {}
+    for option in options:
+        name, sep, uri = option.partition("=")
+        if sep and name in SENSOR_NAMES:
+            if getattr(mission.sensors, name) is None:
+                raise MissionError([Diagnostic(str(args_mission), 1, 1, f"--sensor-driver {option}: the mission's "
+                                               f"`sensors` have no {name}")])
+            drivers[name] = uri
+        else:
+            drivers.update({n: option for n in SENSOR_NAMES if getattr(mission.sensors, n) is not None})
+    return drivers
 
 
 def _vehicles(args: argparse.Namespace) -> int:
@@ -84,9 +103,10 @@ def _sim_serve(args: argparse.Namespace) -> int:
     mission, diags = validate_mission_file(args.mission)
     if mission is None:
         raise MissionError([d for d in diags if not d.warning])
-    stop = threading.Event()
+    stop, streams_stop = threading.Event(), threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
+    signal.signal(signal.SIGUSR1, lambda *_: streams_stop.set())  # rehearse a payload failure
     seed = mission.seed if args.seed is None else args.seed
     print(f"{mission.name}: serving the simulated vehicle on {', '.join(args.mavlink)} at {args.speedup:g}x "
           f"(seed {seed})" + (f"; truth in {args.out}" if args.out else ""), flush=True)
@@ -95,9 +115,11 @@ def _sim_serve(args: argparse.Namespace) -> int:
         fields = " ".join(f"{k}={v}" for k, v in event.items() if k not in ("time", "event"))
         print(f"  t={event['time']:9.1f} s  {event['event']} {fields}", flush=True)
 
+    if args.zenoh:
+        print(f"payload streams on Zenoh {', '.join(args.zenoh)} under {args.zenoh_prefix}/", flush=True)
     summary = serve(mission, args.mavlink, seed=seed, speedup=args.speedup, out=args.out, stop_event=stop,
-                    force=args.force,
-                    on_event=None if args.quiet else show)
+                    on_event=None if args.quiet else show, zenoh=args.zenoh or (), zenoh_prefix=args.zenoh_prefix,
+                    streams_stop=streams_stop, force=args.force)
     print(f"stopped: {summary.sim_time:.1f} s of vehicle time in {summary.wall_time:.1f} s "
           f"({summary.steps} steps)", flush=True)
     return 0
@@ -115,6 +137,10 @@ def _add_sim_parser(sub: Any) -> None:
     p.add_argument("--out", help="write the truth here as it goes (mission.yaml, world.yaml, trajectory.csv, "
                    "usbl.csv, autopilot.jsonl)")
     p.add_argument("--force", action="store_true", help="replace an earlier truth folder whole")
+    p.add_argument("--zenoh", action="append", metavar="ENDPOINT",
+                   help="also publish the payload streams on Zenoh, listening here, e.g. tcp/127.0.0.1:7447 "
+                   "(SIGUSR1 stops them, to rehearse a payload failure)")
+    p.add_argument("--zenoh-prefix", default="auv/sim", metavar="KEY", help="key prefix (default auv/sim)")
     p.add_argument("-q", "--quiet", action="store_true", help="do not print the autopilot's events")
     p.set_defaults(func=_sim_serve)
 # -- end of `auv sim serve` ------------------------------------------------------------------------------------
@@ -130,6 +156,9 @@ def add_onboard_commands(sub: Any) -> None:
     p.add_argument("--force", action="store_true", help="replace an earlier run's folder whole")
     p.add_argument("--connect-timeout", type=float, default=10.0, metavar="S",
                    help="seconds to wait for the vehicle (default 10)")
+    p.add_argument("--sensor-driver", action="append", metavar="[SENSOR=]URI",
+                   help="payload stream driver for SENSOR (mbes, stereo, scanner), or for every sensor the mission "
+                   "has, overriding the mission's `driver:`; e.g. zenoh:auv/sim?connect=tcp/127.0.0.1:7447")
     add_mcap_option(p)
     p.set_defaults(func=_run)
 

@@ -49,7 +49,9 @@ class Timing:
 
     simulated: bool = False
     budget_s: float = 5.0
-    hard_timeout_s: float = 5.0  # wall time after which a running call is abandoned and its worker killed
+    hard_timeout_s: float = 5.0  # after this a running call is abandoned and its worker killed: wall time onboard,
+    # the worker's CPU time in simulation (so that a loaded machine never changes a run)
+    wall_limit_s: float = 600.0  # simulation: a call that neither answers nor burns CPU (a deadlock) for this long
     quantum_s: float = 0.01  # simulation: charged latencies are rounded up to a multiple of this
     start_timeout_s: float = 60.0  # wall time a worker may take to import and configure its plug-in
     latency_s: float | None = None  # simulation: every call's modelled latency (None: its CPU time)
@@ -133,6 +135,7 @@ class RoleWorker:
         self.worker = WorkerProcess(self.spec, dict(self.settings))
         self.ready = False
         self.head_since = math.inf
+        self.head_cpu: float | None = None
 
     def wait_ready(self, deadline: float) -> None:
         """Block until the first worker has configured its plug-in (raises PluginError if it cannot)."""
@@ -197,7 +200,7 @@ class RoleWorker:
 
     def _queue(self, item: _Item) -> None:
         if not self.pending and self.ready:
-            self.head_since = time.monotonic()
+            self._head_started()
         self.pending.append(item)
         self.worker.send(item.message)
 
@@ -220,20 +223,42 @@ class RoleWorker:
             self._lost(f"its worker {self.worker.exit_description()}", crashed=True)
         elif not self.ready and time.monotonic() - self.worker.started_wall > self.timing.start_timeout_s:
             self._lost(f"its worker did not start within {self.timing.start_timeout_s:g} s", crashed=True)
-        elif self.pending and time.monotonic() - self.head_since > self.timing.hard_timeout_s:
-            self._lost(f"no answer within {self.timing.hard_timeout_s:g} s (wall clock)", crashed=False)
+        elif self.pending and (why := self._hung()):
+            self._lost(why, crashed=False)
+
+    def _head_started(self) -> None:
+        """The item at the head of the queue starts now (as far as the host can tell)."""
+        self.head_since = time.monotonic()
+        self.head_cpu = self.worker.cpu_s() if self.timing.simulated else None
+
+    def _hung(self) -> str:
+        """Why the call at the head counts as hung ("" while it does not): onboard, no answer within the hard
+        timeout of wall time; in simulation, the hard timeout of the worker's CPU time spent on it, or the wall
+        limit (a call that burns no CPU and never answers)."""
+        t = self.timing
+        waited = time.monotonic() - self.head_since
+        if not t.simulated:
+            return f"no answer within {t.hard_timeout_s:g} s (wall clock)" if waited > t.hard_timeout_s else ""
+        cpu = self.worker.cpu_s()
+        if cpu is not None and self.head_cpu is not None and cpu - self.head_cpu > t.hard_timeout_s:
+            return f"no answer within {t.hard_timeout_s:g} s of CPU time"
+        return f"no answer within {t.wall_limit_s:g} s (wall clock)" if waited > t.wall_limit_s else ""
 
     def next_deadline(self) -> float:
         """The wall time (monotonic) at which `pump` will act on a hang if no answer comes."""
         if not self.ready:
             return self.worker.started_wall + self.timing.start_timeout_s
-        return self.head_since + self.timing.hard_timeout_s if self.pending else math.inf
+        if not self.pending:
+            return math.inf
+        if self.timing.simulated:  # CPU time is checked at each wake-up: wake at least every second
+            return min(time.monotonic() + 1.0, self.head_since + self.timing.wall_limit_s)
+        return self.head_since + self.timing.hard_timeout_s
 
     def _handle(self, message: Message) -> None:
         kind = message[0]
         if kind == "ready":
             self.ready = True
-            self.head_since = time.monotonic()
+            self._head_started()
             if self._charge_start and self.timing.simulated:
                 self.free_at += self.timing.charge_restart(float(message[1]))
             self._charge_start = False
@@ -242,11 +267,11 @@ class RoleWorker:
         elif kind in ("answer", "raised"):
             item = self.pending.popleft()
             assert item.call is not None and item.message[1] == message[1], (item.message, message[:2])
-            self.head_since = time.monotonic()
+            self._head_started()
             self._answered(item.call, kind == "answer", message[2], float(message[3]), float(message[4]))
         elif kind == "reset":
             self.pending.popleft()
-            self.head_since = time.monotonic()
+            self._head_started()
             if message[1] is not None:
                 self._fault(None, f"reset raised {message[1]}", 0.0, None)
 

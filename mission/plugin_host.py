@@ -16,8 +16,10 @@ Two clocks (`simulated_clock`):
   simulated clock: `latency_s` (a modelled latency, so that a run repeats exactly for its seed) or, with
   `latency_s` None, the worker's CPU time rounded up to `quantum_s` (default 10 ms). `poll(now)` is None before
   the call can be ready, and when `now` may have reached its ready time it blocks until the worker has answered
-  (at most the hard timeout). The budget is the worker's CPU time; the hard timeout, wall time, is
-  `max(3 × budget_s, 30 s)` so that a loaded CI machine never kills a healthy call.
+  (at most the hard timeout). The budget is the worker's CPU time, and so is the hard timeout,
+  `max(3 × budget_s, 30 s)`: a loaded machine stretches a call's wall time, never its CPU time, so it never kills a
+  healthy call and a run repeats; a call that burns no CPU and never answers (a deadlock) is abandoned after
+  `Timing.wall_limit_s` (600 s) of wall time.
 
 `process` (synchronous: submit and wait for the answer) serves tools and benches. `reset()` is queued behind the
 calls already submitted; `close()` asks each worker to close its plug-in and exit, and kills it after
@@ -35,7 +37,7 @@ from mission.plugin_api import StereoImages
 from mission.plugin_calls import PluginCall, RoleWorker, Timing, no_answer
 
 DEFAULT_BUDGET_S = 5.0  # per call; generous for a software renderer's machine, tight enough to catch a hang
-SIMULATED_HARD_TIMEOUT_S = 30.0  # simulation's hard (wall) timeout is at least this, and 3 × the budget
+SIMULATED_HARD_TIMEOUT_S = 30.0  # simulation's hard timeout (CPU time) is at least this, and 3 × the budget
 
 
 class PluginHost:
@@ -51,7 +53,8 @@ class PluginHost:
         self.budget_s = budget_s
         if hard_timeout_s is None:
             hard_timeout_s = max(3.0 * budget_s, SIMULATED_HARD_TIMEOUT_S) if simulated_clock else budget_s
-        self.timing = Timing(simulated_clock, budget_s, hard_timeout_s, quantum_s, start_timeout_s, latency_s)
+        self.timing = Timing(simulated_clock, budget_s, hard_timeout_s, quantum_s=quantum_s,
+                             start_timeout_s=start_timeout_s, latency_s=latency_s)
         self.close_timeout_s = close_timeout_s
         self.names: dict[str, str] = {}
         self.workers: dict[str, RoleWorker] = {}

@@ -21,6 +21,7 @@ A killed or crashed worker is replaced by a new incarnation; this class never re
 from __future__ import annotations
 
 import multiprocessing
+import os
 import pickle
 import queue
 import signal
@@ -115,6 +116,9 @@ def _die_with_parent() -> None:
             pass
 
 
+_CLOCK_TICKS = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+
+
 class WorkerProcess:
     """One running incarnation of a plug-in's worker, seen from the host."""
 
@@ -145,6 +149,15 @@ class WorkerProcess:
     def send(self, message: Message) -> None:
         """Queue a message for the worker; never blocks."""
         self._feed.put(message)
+
+    def cpu_s(self) -> float | None:
+        """The worker's CPU time so far (user + system, from /proc), or None where /proc cannot tell."""
+        try:
+            with open(f"/proc/{self.process.pid}/stat", encoding="ascii") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            return (int(fields[11]) + int(fields[12])) / _CLOCK_TICKS
+        except (OSError, ValueError, IndexError):
+            return None
 
     def receive(self, timeout: float = 0.0) -> list[Message]:
         """The messages the worker has sent so far, waiting up to `timeout` seconds for the first one."""

@@ -272,6 +272,20 @@ def test_with_a_modelled_latency_a_crash_costs_a_quantum_and_the_restart_a_fixed
     assert queued.ready_at == pytest.approx(2.01 + RESTART_CHARGE_S + 0.1, abs=1e-9)
 
 
+def test_in_simulated_time_the_hard_timeout_counts_the_workers_cpu_so_only_a_spinning_call_is_killed(host_of):
+    """A call that waits 2 s of wall time without CPU (what a loaded machine looks like) outlives a 0.5 s hard
+    timeout; one that spins its CPU is abandoned at it, charged its budget, and its worker restarted."""
+    host, recorder = host_of("SleepingPlugin", {"sleep_s": 2.0}, simulated_clock=True, budget_s=0.2,
+                             hard_timeout_s=0.5)
+    assert wait_for(host.submit("referencing", frame(1.0), FAULT, 1.0)).recognised
+    assert recorder.faults() == []
+    host, recorder = host_of("SlowPlugin", {"cpu_s": 30.0}, simulated_clock=True, budget_s=0.2, hard_timeout_s=0.5)
+    started = time.monotonic()
+    result = wait_for(host.submit("referencing", frame(1.0), None, 1.0))
+    assert not result.recognised and "of CPU time" in result.details["reason"]
+    assert time.monotonic() - started < 20.0 and result.details["worker_restarted"]
+
+
 def test_a_plugin_that_fails_to_configure_is_a_plugin_error_at_construction():
     with pytest.raises(PluginError, match="failed to start: ValueError\\('this plug-in never starts'\\)"):
         PluginHost({"referencing": TESTING + "BrokenPlugin"}, {}, Recorder())

@@ -8,7 +8,10 @@ machine slow the wall clock but not the figures.
   skipped when absent): long KLT tracking (`klt`, the check), `adaptive`, `network`; end-point drift as a
   percentage of the path, ATE RMSE after SE(3) alignment, RPE (`mission.trajectory_eval`), frames per CPU second at
   full resolution; and seed 003's Table 1 side by side: the classic scheme at steps 2/4/8/16 against KLT tracking
-  with step 2 and fragments of 1/2/4/8 steps (the same effective step).
+  with step 2 and fragments of 1/2/4/8 steps (the same effective step). Each method also as the seed had it
+  (`_before`: no bundle adjustment, fresh corners at every KLT fragment; `vo_turns.BEFORE`).
+- Turns (`vo_turns`): rendered ~90° and S-turns seen by a forward-looking KITTI-like camera and by the down-looking
+  seabed camera, every method before and after (cached renders, not in git).
 - Table 1 on a rendered seabed: down-looking, 600×400, 25 fps, 3.5–8 m altitude, 240 s (3.2 s with --quick); the
   same eight runs, plus the adaptive method's positions processed and error against the base method (KLT, step 2).
 - Table 2: laps over the same patch of seabed (a trajectory crossing itself), processed every 8th frame of 10 Hz:
@@ -18,9 +21,9 @@ machine slow the wall clock but not the figures.
 - Plug-in: `stereo-vo` on 1200×900 pairs at 10 Hz, 2–4 m above manifold-1 of the reference world: CPU ms per
   `process` call.
 
-`--quick` shortens the rendered runs (3.2 s of Table 1, 2.2 laps of a 2 m circle, 3.2 s of robustness, 12 plug-in
-frames), leaves out KITTI's side-by-side table, and checks the child's CPU seconds against 60 (its wall time is
-reported too).
+`--quick` runs one turning sequence (down-looking 90°, KLT), shortens the rendered runs (3.2 s of Table 1, 2.2 laps of
+a 2 m circle, 3.2 s of robustness, 12 plug-in frames), leaves out KITTI's side-by-side table, and checks the child's
+CPU seconds against 60 (its wall time is reported too).
 
 "Mean error" is the seed's average absolute position error: the estimate anchored at the first true pose, no
 alignment; ATE (aligned) is given beside it.
@@ -43,6 +46,7 @@ import numpy as np
 from mission.bench import REPO, check
 from mission.bench.vo_rendered import network, robustness, table1
 from mission.bench.vo_runs import EFFECTIVE_STEPS, lockstep, relative, summarise, table1_specs
+from mission.bench.vo_turns import BEFORE, BUNDLE, turns
 
 KITTI = REPO.parent / "shared" / "data" / "kitti06_0-50"
 def _kitti(quick: bool) -> dict[str, Any]:
@@ -59,7 +63,14 @@ def _kitti(quick: bool) -> dict[str, Any]:
     read_ms = 1e3 * (time.process_time() - t0) / len(frames)
     gt = relative(seq.gt_poses)
     fps = float(1.0 / np.median(np.diff(seq.times)))
-    specs: dict[str, tuple[str, dict[str, Any]]] = {"klt": ("klt", {}), "network": ("network", {})}
+    specs: dict[str, tuple[str, dict[str, Any]]] = {"klt": ("klt", {}), "network": ("network", {}),
+                                                     "klt_before": ("klt", BEFORE), "klt_ba": ("klt", BUNDLE)}
+    if not quick:
+        adaptive = {"fps": fps, "max_step": 64}
+        specs.update(network_before=("network", BEFORE), network_ba=("network", BUNDLE),
+                     adaptive_before=("adaptive", {**adaptive, **BEFORE}),
+                     adaptive_ba=("adaptive", {**adaptive, **BUNDLE}), classic=("classic", {}),
+                     classic_before=("classic", BEFORE), classic_ba=("classic", BUNDLE))
     # --quick keeps the checked method and the other two; the side-by-side table (eight more runs, the classic
     # ones at full resolution the slowest) only in the full run.
     specs.update({"adaptive": table1_specs(fps)["adaptive"]} if quick else table1_specs(fps))
@@ -127,8 +138,8 @@ def measure(quick: bool) -> dict[str, Any]:
     cv2.setNumThreads(1)
     t0, c0 = time.perf_counter(), time.process_time()
     out: dict[str, Any] = {}
-    for name, fn in (("kitti", _kitti), ("table1", table1), ("network", network), ("robustness", robustness),
-                     ("plugin", _plugin)):
+    for name, fn in (("kitti", _kitti), ("turns", turns), ("table1", table1), ("network", network),
+                     ("robustness", robustness), ("plugin", _plugin)):
         t = time.perf_counter()
         out[name] = fn(quick)
         out[name]["wall_s"] = round(time.perf_counter() - t, 1)
@@ -149,6 +160,10 @@ def checks_of(results: dict[str, Any]) -> dict[str, dict[str, Any]]:
         klt = kitti["methods"]["klt"]
         checks["kitti_endpoint_drift_percent"] = check(klt["endpoint_drift_percent"], "<= 1.0")
         checks["kitti_fps_one_core"] = check(klt["fps_cpu"], ">= 20")
+    for name, seq in results["turns"].items():
+        if not isinstance(seq, dict):  # the study's wall_s
+            continue
+        checks[f"turn_{name}_klt_drift_percent"] = check(seq["methods"]["klt"]["endpoint_drift_percent"], "<= 1.0")
     t1 = results["table1"]
     better = sum(t1["table1_cm"][f"step_{e}"]["klt"] <= t1["table1_cm"][f"step_{e}"]["classic"]
                  for e in EFFECTIVE_STEPS)

@@ -16,6 +16,7 @@ from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationInfo, 
 from mission import geodesy
 from mission.language import limits as L
 from mission.language.fault_models import Fault
+from mission.language.streamed import Streamed
 from mission.language.units import Duration, Percent
 
 
@@ -120,7 +121,7 @@ class VehicleSettings(Strict):
 Vehicle = VehicleSettings  # the same model under its short name (`Mission.vehicle`)
 
 
-class Mbes(Strict):
+class Mbes(Streamed):
     beams: Annotated[int, between(2, L.MAX_BEAMS)] = 256
     swath_deg: Annotated[float, Field(ge=1, lt=180)] = 120.0
     max_range: Range = 80.0
@@ -128,7 +129,7 @@ class Mbes(Strict):
     range_sigma: Annotated[float, between(0.0, 10.0)] = 0.05
 
 
-class Stereo(Strict):
+class Stereo(Streamed):
     width: Annotated[int, between(16, L.MAX_IMAGE_SIDE)] = 1200
     height: Annotated[int, between(16, L.MAX_IMAGE_SIDE)] = 900
     fx: Annotated[float, between(1.0, 1.0e5)] = 1000.0
@@ -137,7 +138,7 @@ class Stereo(Strict):
     max_range: Range = 8.0
 
 
-class Scanner(Strict):
+class Scanner(Streamed):
     fov_deg: tuple[Annotated[float, Field(ge=1, lt=180)], Annotated[float, Field(ge=1, lt=180)]] = (60.0, 45.0)
     max_range: Range = 12.0
     rate_hz: Rate = 2.0
@@ -397,4 +398,3 @@ class Mission(Strict):
 
     def object(self, object_id: str) -> KnownObject:
         return next(o for o in self.objects if o.id == object_id)
-

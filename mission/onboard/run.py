@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from mission.agents import REGISTRY
 from mission.artifacts import Artifacts
 from mission.errors import MissionError, UnsupportedMissionError
 from mission.events import EventLog
@@ -23,9 +24,11 @@ from mission.faults import faults_diagnostic
 from mission.interrupt import signal_name, stop_on_signals
 from mission.language.models import Mission
 from mission.onboard.report import onboard_metrics
+from mission.onboard.streamed import StreamedVehicle, guarded_agents
 from mission.plugin_host import PluginHost
 from mission.plugin_settings import plugin_settings
 from mission.runfolder import TrajectoryWriter, prepare_run_folder, write_metrics
+from mission.sensors.streams import open_streams
 from mission.vehicle import Command, Observation
 from mission.vehicles import OnboardVehicle, VehicleOptions, open_vehicle
 
@@ -89,8 +92,13 @@ class RecordingVehicle:
 
 
 def run_onboard(mission: Mission, uri: str, out: str | Path, connect_timeout: float = 10.0,
-                seed: int | None = None, signals: bool = True, force: bool = False) -> OnboardResult:
+                seed: int | None = None, signals: bool = True,
+                sensor_drivers: dict[str, str] | None = None, force: bool = False) -> OnboardResult:
     """Fly `mission` on the vehicle at `uri` and write the run folder `out` (see the module docstring).
+
+    Mission sensors with a `driver:` (or an entry in `sensor_drivers`, sensor name → driver URI) get their payload
+    stream (`mission.onboard.streamed`); what each stream delivered, dropped and lost goes to metrics.json under
+    `sensors`.
 
     Raises `VehicleError` when the vehicle cannot be opened (the run folder then holds the mission and an
     event saying why), `RunFolderError` when `out` cannot be a run folder (`mission.runlock`; `force` replaces an
@@ -116,16 +124,28 @@ def run_onboard(mission: Mission, uri: str, out: str | Path, connect_timeout: fl
     wall0 = time.perf_counter()
     host: PluginHost | None = None
     try:
+        try:  # the streams first: a driver that cannot start refuses the run before the vehicle is armed
+            streams = open_streams(mission, sensor_drivers)
+        except Exception as exc:
+            log.emit("sensor_unavailable", 0.0, reason=str(exc))
+            raise
         try:
             vehicle = open_vehicle(uri, mission, VehicleOptions(connect_timeout=connect_timeout, emit=emit))
-        except Exception as exc:
+        except BaseException as exc:
+            for stream in streams.values():
+                stream.close()
             log.emit("vehicle_unavailable", 0.0, vehicle=uri, reason=str(exc))
             raise
+        if streams:
+            for name, stream in streams.items():
+                emit("sensor_stream", 0.0, sensor=name, driver=stream.uri, timeout_s=stream.timeout)
+            vehicle = StreamedVehicle(vehicle, streams, emit)
         recording = RecordingVehicle(vehicle, writer)
         try:
             roles = mission.plugins.model_dump()
             host = PluginHost(roles, plugin_settings(mission), emit) if any(roles.values()) else None
-            executive = Executive(mission, recording, emit, plugins=host, artifacts=Artifacts(out))
+            agents = guarded_agents(REGISTRY, vehicle) if isinstance(vehicle, StreamedVehicle) else None
+            executive = Executive(mission, recording, emit, agents=agents, plugins=host, artifacts=Artifacts(out))
             with stop_on_signals(executive.request_stop, install=signals) as stop:
                 report = executive.run()
         finally:
@@ -135,6 +155,8 @@ def run_onboard(mission: Mission, uri: str, out: str | Path, connect_timeout: fl
         wall = time.perf_counter() - wall0
         metrics = onboard_metrics(mission.name, seed, report, wall, recording.distance_m,
                                   recording.energy_used_wh, mission.vehicle.energy_wh)
+        if isinstance(vehicle, StreamedVehicle):
+            metrics["sensors"] = vehicle.stream_metrics()
         if stop.signum is not None:
             metrics.update(interrupted=True, signal=signal_name(stop.signum))
             log.emit("interrupted", report.end_time, signal=signal_name(stop.signum))

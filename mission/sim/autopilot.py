@@ -20,6 +20,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from mission.sim.mission_protocol import MissionStore
 from mission.sim.vehicle import DEPTH_SIGMA_M, SimulatedVehicle
 from mission.vehicle import Command
 from mission.vehicles import ardusub as sub
@@ -58,6 +59,7 @@ class SimAutopilot:
         self.next_due = dict.fromkeys(self.periods, 0.0)
         self.velocity_setpoint_at: float | None = None  # vehicle time of the last velocity setpoint
         self.last_depth = vehicle.depth_meas
+        self.missions = MissionStore(log)
         self._hold()
 
     @property
@@ -102,6 +104,8 @@ class SimAutopilot:
     def handle(self, msg: Any, reply: Callable[..., None]) -> None:
         """One message from a link; `reply(name, *args)` answers on that link only."""
         kind = msg.get_type()
+        if kind.startswith("MISSION_") and self.missions.handle(msg, reply):
+            return
         if kind == "HEARTBEAT":
             if msg.get_srcSystem() == self.gcs_system and msg.type == 6:  # MAV_TYPE_GCS
                 self.gcs_seen = time.monotonic()

@@ -5,7 +5,8 @@ ArduSub's side of MAVLink through `mission.sim.autopilot.SimAutopilot` on one or
 (`udpout:127.0.0.1:14550`, `udpin:…`, `tcp:…`): telemetry goes to every link, answers to the link asked.
 The vehicle's clock (`time_boot_ms`) is the simulated clock. With `out`, the truth is written as it goes
 (`mission.runfolder.prepare_run_folder`, then `mission.sim.truth_log`) and what the autopilot did goes to
-`autopilot.jsonl`. The truth never crosses the link.
+`autopilot.jsonl`. The truth never crosses the link. With `zenoh` (endpoints to listen on), the payload streams
+(multibeam, scanner, stereo) go out on Zenoh too (`mission.sim.publish`), stamped with the vehicle's clock.
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ class ServeSummary:
     wall_time: float = 0.0
     steps: int = 0
     events: list[dict[str, Any]] = field(default_factory=list)
+    published: dict[str, int] = field(default_factory=dict)  # payload frames published per sensor (Zenoh)
 
 
 class _Links:
@@ -97,9 +99,13 @@ def _send(conn: Any, name: str, *args: Any) -> None:
 def serve(mission: Mission, address: str | Sequence[str], seed: int | None = None, speedup: float = 1.0,
           out: str | Path | None = None, stop_event: threading.Event | None = None,
           gcs_timeout: float = FS_GCS_TIMEOUT, dt: float = 0.2,
-          on_event: Callable[[dict[str, Any]], None] | None = None, force: bool = False) -> ServeSummary:
+          on_event: Callable[[dict[str, Any]], None] | None = None, zenoh: Sequence[str] = (),
+          zenoh_prefix: str = "auv/sim", streams_stop: threading.Event | None = None,
+          force: bool = False) -> ServeSummary:
     """Serve `mission`'s simulated vehicle on `address` (one pymavlink connection string or several) until
-    `stop_event` is set; returns what happened. `on_event` sees each autopilot event as it happens."""
+    `stop_event` is set; returns what happened. `on_event` sees each autopilot event as it happens. With `zenoh`
+    endpoints (`tcp/127.0.0.1:7447`), the payload streams are published under `zenoh_prefix`; setting
+    `streams_stop` ends them (the Zenoh session closes, as if the payload computer died) while the vehicle goes on."""
     if mission.world is None:
         raise AuvError(f"mission '{mission.name}' names no world; serving it needs `world:`")
     if speedup <= 0:
@@ -132,6 +138,15 @@ def serve(mission: Mission, address: str | Sequence[str], seed: int | None = Non
     where = (mission.origin.lat, mission.origin.lon) if mission.origin is not None else (0.0, 0.0)
     autopilot = SimAutopilot(vehicle, where, links.send_all, log,
                              gcs_timeout=gcs_timeout)
+    streams = None
+    if zenoh:
+        from mission.sim.publish import StreamPublisher
+
+        try:
+            streams = StreamPublisher(vehicle, list(zenoh), zenoh_prefix, log)
+        except BaseException:
+            links.close()
+            raise
     wall0 = base = time.monotonic()
     base_steps = 0
     next_beat = wall0
@@ -151,6 +166,13 @@ def serve(mission: Mission, address: str | Sequence[str], seed: int | None = Non
             summary.steps += 1
             autopilot.check()
             autopilot.telemetry(dt)
+            if streams is not None and streams_stop is not None and streams_stop.is_set():
+                summary.published = dict(streams.published)
+                streams.close()
+                streams = None
+                log("streams_stopped")
+            if streams is not None:
+                streams.publish()
             if now >= next_beat:
                 autopilot.heartbeat()
                 next_beat = now + 1.0
@@ -161,6 +183,9 @@ def serve(mission: Mission, address: str | Sequence[str], seed: int | None = Non
                 vehicle.log.fixes.clear()
     finally:
         links.close()
+        if streams is not None:
+            streams.close()
+            summary.published = dict(streams.published)
         if truth is not None:
             truth.close()
         if events is not None:

@@ -19,6 +19,7 @@ from perception_plugins.stereo import Cloud, Detector, stereo_cloud, triangulate
 from perception_plugins.vo.features import stereo_match
 from perception_plugins.vo.frontend import Array, Step, geometry_of, grey
 from perception_plugins.vo.motion import estimate_motion
+from perception_plugins.vo.window import KeyFeatures, Matches
 
 
 def describe(frame: StereoImages, features: int = 1500, mask: NDArray[np.uint8] | None = None,
@@ -66,6 +67,7 @@ class ClassicMatcher:
         self.key_points: Array = np.zeros((0, 3))
         self._key: Cloud | None = None
         self._pending: tuple[int, Cloud] | None = None
+        self._matches: Matches | None = None
 
     def start(self, frame: StereoImages, mask: NDArray[np.uint8] | None = None) -> int:
         if self._pending is not None and self._pending[0] == id(frame) and mask is None:
@@ -85,10 +87,21 @@ class ClassicMatcher:
                                  baseline=frame.baseline, T_a_b_guess=T_key_pred, threshold_px=self.threshold_px)
         if motion is None:
             return None
-        return Step(motion.T_a_b, motion.count, {"cloud": cloud})
+        a, b = ia[motion.inliers], ib[motion.inliers]
+        return Step(motion.T_a_b, motion.count,
+                    {"cloud": cloud, "matches": Matches(a, cloud.uv_left[b], cloud.uv_right[b])})
+
+    def key_features(self) -> KeyFeatures:
+        if self._key is None:
+            return KeyFeatures(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((0, 3)))
+        return KeyFeatures(self._key.uv_left, self._key.uv_right, self._key.points_cam)
+
+    def key_matches(self) -> Matches | None:
+        return self._matches
 
     def commit(self, frame: StereoImages, step: Step, end: bool) -> Array:
         self._pending = (id(frame), step.data["cloud"])
+        self._matches = step.data["matches"]
         return step.T_key_b
 
 

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from mission.plugin_api import StereoImages
 from perception_plugins.stereo import RectifiedStereo
+from perception_plugins.vo.window import KeyFeatures, Matches
 
 Array = NDArray[np.float64]
 
@@ -32,6 +33,14 @@ class Step:
 class Frontend(Protocol):
     key_points: Array
     """(N, 3) the keyframe's triangulated points in its camera frame (its view, for overlaps and the step)."""
+
+    def key_features(self) -> KeyFeatures:
+        """The keyframe's features: left and right pixels and the points (rows of `key_points`)."""
+        ...
+
+    def key_matches(self) -> Matches | None:
+        """After a `commit` that ended a fragment: the keyframe's features found in the fragment's end pair."""
+        ...
 
     def start(self, frame: StereoImages, mask: NDArray[np.uint8] | None = None) -> int: ...
 

@@ -23,10 +23,11 @@ from numpy.typing import NDArray
 
 from mission.geometry import invert, transform_points
 from mission.plugin_api import StereoImages
-from perception_plugins.stereo import RectifiedStereo
-from perception_plugins.vo.features import lk, stereo_features, stereo_match
+from perception_plugins.stereo import RectifiedStereo, triangulate
+from perception_plugins.vo.features import StereoFeatures, lk, stereo_features, stereo_match
 from perception_plugins.vo.frontend import Array, Step, geometry_of, grey
 from perception_plugins.vo.motion import estimate_motion
+from perception_plugins.vo.window import KeyFeatures, Matches
 
 OFFSET_DEPTH_RATIO = 2.5
 """A fragment estimates the disparity offset only when its points' depths span this ratio (90th over 10th
@@ -62,10 +63,15 @@ class KltTracker:
 
     def __init__(self, features: int = 500, threshold_px: float = 1.5, back_tol: float = 1.0,
                  max_depth: float | None = None, calibrate_offset: bool = True,
-                 offset_depth_ratio: float = OFFSET_DEPTH_RATIO, track_blur_px: float = 0.0) -> None:
+                 offset_depth_ratio: float = OFFSET_DEPTH_RATIO, track_blur_px: float = 0.0,
+                 carry: bool = False) -> None:
         self.features, self.threshold_px, self.back_tol, self.max_depth = features, threshold_px, back_tol, max_depth
         self.calibrate_offset, self.offset_depth_ratio = calibrate_offset, offset_depth_ratio
         self.track_blur_px = track_blur_px
+        self.carry = carry
+        """A fragment's start keeps the previous fragment's survivors (seen in both end images) as features at
+        their tracked pixels, and detects new corners only away from them (`start`)."""
+        self._carried: tuple[int, Array, Array] | None = None  # (id of the end frame, left pixels, right pixels)
         """σ (px) of the Gaussian applied to the images LK tracks across time (not to the stereo matching)."""
         self.offsets: list[float] = []
         """Disparity offsets (px) estimated at fragment ends (absolute: the offset in use plus the correction)."""
@@ -73,6 +79,8 @@ class KltTracker:
         """The disparity offset in use: the median of `offsets` once there are three."""
         self.key_points: Array = np.zeros((0, 3))
         self._key_uv: Array = np.zeros((0, 2))
+        self._key_uv_right: Array = np.zeros((0, 2))
+        self._matches: Matches | None = None
         self._key_image: NDArray[np.uint8] | None = None
         self._last_image: NDArray[np.uint8] | None = None
         self._last_uv: Array = np.zeros((0, 2))
@@ -86,12 +94,25 @@ class KltTracker:
 
     def start(self, frame: StereoImages, mask: NDArray[np.uint8] | None = None) -> int:
         left, right = grey(frame.left), grey(frame.right)
-        feats = stereo_features(left, right, self._geometry(frame), self.features, mask, self._disparity,
-                                self.max_depth)
+        geometry = self._geometry(frame)
+        carried, self._carried = self._carried if self._carried and self._carried[0] == id(frame) else None, None
+        if carried is not None:
+            # Continue the survivors' tracks: their end pixels become key features; new corners fill the rest.
+            kept = triangulate(geometry, carried[1], carried[2])
+            free = np.full(left.shape[:2], 255, np.uint8) if mask is None else mask.copy()
+            for u, v in kept.uv_left:
+                cv2.circle(free, (int(round(u)), int(round(v))), 7, 0, -1)
+            new = stereo_features(left, right, geometry, max(self.features - len(kept), 0), free, self._disparity,
+                                  self.max_depth)
+            feats = StereoFeatures(np.concatenate([kept.uv_left, new.uv_left]),
+                                   np.concatenate([kept.uv_right, new.uv_right]),
+                                   np.concatenate([kept.points_cam, new.points_cam]))
+        else:
+            feats = stereo_features(left, right, geometry, self.features, mask, self._disparity, self.max_depth)
         self._key_doffs = self.doffs
         if len(feats):
             self._disparity = float(np.median(feats.uv_left[:, 0] - feats.uv_right[:, 0]))
-        self.key_points, self._key_uv = feats.points_cam, feats.uv_left
+        self.key_points, self._key_uv, self._key_uv_right = feats.points_cam, feats.uv_left, feats.uv_right
         self._key_image = self._last_image = self._for_tracking(left)
         self._last_uv = feats.uv_left.copy()
         self._alive = np.ones(len(feats), dtype=bool)
@@ -116,8 +137,15 @@ class KltTracker:
         return Step(motion.T_a_b, motion.count, {"index": idx[motion.inliers], "uv": uv[motion.inliers],
                                                  "left": left, "tracked": tracked})
 
+    def key_features(self) -> KeyFeatures:
+        return KeyFeatures(self._key_uv, self._key_uv_right, self.key_points)
+
+    def key_matches(self) -> Matches | None:
+        return self._matches
+
     def commit(self, frame: StereoImages, step: Step, end: bool) -> Array:
         idx, uv, left = step.data["index"], step.data["uv"], step.data["left"]
+        self._matches = None
         self._alive[:] = False
         self._alive[idx] = True
         self._last_uv[idx] = uv
@@ -139,6 +167,8 @@ class KltTracker:
         motion = estimate_motion(self.key_points[idx], uv, frame.K, uv_b_right=uv_r, right_ok=right_ok,
                                  baseline=frame.baseline, T_a_b_guess=step.T_key_b, threshold_px=self.threshold_px,
                                  doffs=geometry.doffs, estimate_offset=calibrate)
+        uv_r = np.where(right_ok[:, None], uv_r, np.nan)
+        self._matches = Matches(idx, uv, uv_r)
         if motion is None:
             return step.T_key_b
         # The refinement must stay near the tracked estimate, and the offset correction small: on noise (a
@@ -146,6 +176,11 @@ class KltTracker:
         moved = float(np.linalg.norm(motion.T_a_b[:3, 3] - step.T_key_b[:3, 3]))
         if abs(motion.disparity_offset) > 1.0 or moved > 0.2 * float(np.linalg.norm(step.T_key_b[:3, 3])) + 0.01:
             return step.T_key_b
+        keep = motion.inliers
+        self._matches = Matches(idx[keep], uv[keep], uv_r[keep])
+        both = keep[right_ok[keep]]
+        if self.carry:
+            self._carried = (id(frame), uv[both], uv_r[both])
         if calibrate:
             self.offsets.append(self._key_doffs + motion.disparity_offset)
             if len(self.offsets) >= 3:

@@ -11,6 +11,7 @@ from mission.plugin_api import StereoImages
 from perception_plugins.vo import Odometer, settings_for
 from perception_plugins.vo.frontend import Step
 from perception_plugins.vo.se3 import from_rotvec_translation
+from perception_plugins.vo.window import KeyFeatures, Matches
 
 
 class ScriptedFrontend:
@@ -29,6 +30,12 @@ class ScriptedFrontend:
 
     def commit(self, frame: StereoImages, step: Step, end: bool) -> NDArray[np.float64]:
         return step.T_key_b
+
+    def key_features(self) -> KeyFeatures:
+        return KeyFeatures(np.zeros((20, 2)), np.zeros((20, 2)), self.key_points)
+
+    def key_matches(self) -> Matches | None:
+        return None
 
 
 def _frame(t: float) -> StereoImages:

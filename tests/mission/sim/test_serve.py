@@ -192,3 +192,35 @@ def test_the_cli_serves_the_vehicle_and_stops_cleanly_on_sigterm(tmp_path: Path)
     assert 5000 < later.time_boot_ms - first.time_boot_ms < 16000  # ~1.3 s of wall time at 10x
     assert "field-transit: serving" in stdout and "stopped:" in stdout
     assert float(rows(out / "trajectory.csv")[-1]["time"]) * 1000 >= later.time_boot_ms
+
+
+def test_a_mission_exported_for_mavlink_uploads_to_serve_and_reads_back_item_for_item(tmp_path: Path) -> None:
+    """`auv export --format mavlink --upload` against `auv sim serve`: every item is acknowledged and stored, and
+    a download (MISSION_REQUEST_LIST) gives them back to the 1e-7° of MISSION_ITEM_INT."""
+    from mission.export.mavlink_plan import read_wpl
+
+    path = ROOT / "missions" / "field_survey.yaml"
+    plan = tmp_path / "plan.waypoints"
+    port = free_udp_port()
+    with ServedVehicle(load_mission(path), f"udpout:127.0.0.1:{port}", speedup=5) as served:
+        out = subprocess.run([sys.executable, "-m", "mission", "export", str(path), "--format", "mavlink", "--out",
+                              str(plan), "--upload", f"udpin:127.0.0.1:{port}"], capture_output=True, text=True,
+                             timeout=120)
+        assert out.returncode == 0, out.stderr
+        items = read_wpl(plan)
+        [uploaded] = [e for e in served.events if e["event"] == "mission_uploaded"]
+        assert uploaded["items"] == len(items) > 5
+        gcs = Gcs(port)
+        try:
+            assert gcs.conn.wait_heartbeat(timeout=5) is not None  # a udpin link learns its peer from a packet
+            gcs.conn.mav.mission_request_list_send(1, 1)
+            count = gcs.conn.recv_match(type="MISSION_COUNT", blocking=True, timeout=5)
+            assert count is not None and count.count == len(items)
+            for it in items:
+                gcs.conn.mav.mission_request_int_send(1, 1, it.seq)
+                back = gcs.conn.recv_match(type="MISSION_ITEM_INT", blocking=True, timeout=5)
+                assert back is not None and (back.seq, back.command, back.frame) == (it.seq, it.command, it.frame)
+                assert back.x == round(it.lat * 1e7) and back.y == round(it.lon * 1e7)
+                assert back.z == pytest.approx(it.z, abs=1e-3)
+        finally:
+            gcs.close()
