@@ -201,7 +201,12 @@ class SimulatedVehicle:
         self.aiding = usbl and self.usbl_sigma > 0.0
 
     def set_payload(self, sensors: frozenset[str]) -> None:
+        switched_on = sensors - self.payload
         self.payload = sensors
+        # a sensor switched back on starts now: no burst of the samples that fell due while it was off
+        for name, due in (("mbes", "next_ping"), ("stereo", "next_frame"), ("scanner", "next_scan")):
+            if name in switched_on:
+                setattr(self, due, max(getattr(self, due), self.truth.time))
         if "mbes" in sensors and self.mbes is None and self.mission.sensors.mbes is not None:
             from mission.sim.mbes import Multibeam
             from mission.sim.mjworld import mjworld_for

@@ -184,3 +184,25 @@ def test_auv_run_refuses_a_mission_with_faults_on_the_line_of_its_faults_key(wri
     line = next(k for k, text in enumerate(path.read_text().splitlines(), 1) if text.startswith("faults:"))
     assert len(err) == 1 and err[0].startswith(f"{path}:{line}:1: faults: inject faults in simulation only")
     assert not (Path(path).parent / "run").exists()
+
+
+def test_a_multibeam_switched_back_on_pings_at_its_rate_with_no_burst_of_missed_pings(write_mission):
+    from mission.language.loader import load_world
+    from mission.sim.vehicle import SimulatedVehicle
+    from mission.vehicle import Command
+    from mission.world.scene import build_scene
+
+    path = write_mission("sonar", DR_BOX, "sensors:\n  mbes: {beams: 32, rate_hz: 5}\n  dvl: {drift_percent: 0.5}\n",
+                         header=f"world: {WORLD}\nsafety: {{max_depth: 120}}\n")
+    mission = load_mission(path)
+    vehicle = SimulatedVehicle(mission, build_scene(load_world(mission.world)), seed=1)
+    vehicle.apply(Command(heading=45.0, speed=1.5, depth=30.0))
+    times: list[float] = []
+    for payload, until in ((frozenset({"mbes"}), 2.0), (frozenset(), 12.0), (frozenset({"mbes"}), 14.0)):
+        vehicle.set_payload(payload)
+        while vehicle.truth.time < until - 1e-9:
+            vehicle.advance()
+            times += [p.time for p in vehicle.observe().sonar]
+    after = [t for t in times if t > 12.0 - 1e-9]
+    assert not [t for t in times if 2.2 < t < 12.0 - 1e-9]  # off: nothing
+    assert 9 <= len(after) <= 11  # 2 s at 5 Hz, not the 50 pings that fell due while it was off
