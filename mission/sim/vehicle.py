@@ -57,6 +57,9 @@ class SimLog:
     scans: list[tuple[float, Any, Any]] = field(default_factory=list)  # (time, true origin, true object hits)
 
 
+NEXT_SAMPLE = {"mbes": "next_ping", "stereo": "next_frame", "scanner": "next_scan"}  # sensor → its next due time
+
+
 class SimulatedVehicle:
     """A kinematic AUV in a scene. `element` is set by the runner so that log rows say what was running."""
 
@@ -201,12 +204,9 @@ class SimulatedVehicle:
         self.aiding = usbl and self.usbl_sigma > 0.0
 
     def set_payload(self, sensors: frozenset[str]) -> None:
-        switched_on = sensors - self.payload
+        for name in (sensors - self.payload) & NEXT_SAMPLE.keys():  # switched on: no burst of the missed samples
+            setattr(self, NEXT_SAMPLE[name], max(getattr(self, NEXT_SAMPLE[name]), self.truth.time))
         self.payload = sensors
-        # a sensor switched back on starts now: no burst of the samples that fell due while it was off
-        for name, due in (("mbes", "next_ping"), ("stereo", "next_frame"), ("scanner", "next_scan")):
-            if name in switched_on:
-                setattr(self, due, max(getattr(self, due), self.truth.time))
         if "mbes" in sensors and self.mbes is None and self.mission.sensors.mbes is not None:
             from mission.sim.mbes import Multibeam
             from mission.sim.mjworld import mjworld_for
