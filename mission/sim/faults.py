@@ -49,10 +49,12 @@ class ActiveFaults:
         """Start and end the faults due at `time` (emitting `fault_started`/`fault_ended`); returns the energy lost
         by battery steps that start now (Wh)."""
         lost_wh = 0.0
+        changed = False
         for k, fault in enumerate(self.faults):
             window = fault.window
             if self._state[k] == "pending" and time >= window.start - 1e-9:
                 self._state[k] = "active"
+                changed = True
                 params = fault.window
                 if isinstance(params, BatteryStep):
                     lost_wh += params.wh if params.wh is not None else (params.percent or 0.0) / 100.0 * \
@@ -61,9 +63,11 @@ class ActiveFaults:
                     emit("fault_started", time, **fault_fields(fault))
             if self._state[k] == "active" and window.end is not None and time >= window.end - 1e-9:
                 self._state[k] = "ended"
+                changed = True
                 if emit is not None:
                     emit("fault_ended", time, fault=fault.kind)
-        self._refresh()
+        if changed:  # (every control step comes here: a mission without faults costs a loop over nothing)
+            self._refresh()
         return lost_wh
 
     def _refresh(self) -> None:
