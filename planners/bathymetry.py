@@ -36,9 +36,11 @@ class SoundingGrid:
         j = np.rint((pts[:, 1] - self.east0) / self.cell).astype(np.int64)
         ok = (i >= 0) & (i < self.shape[0]) & (j >= 0) & (j < self.shape[1]) & np.isfinite(pts[:, 2])
         flat = i[ok] * self.shape[1] + j[ok]
-        size = self.total.size
-        self.total += np.bincount(flat, weights=pts[ok, 2], minlength=size)
-        self.count += np.bincount(flat, minlength=size)
+        # Only the cells this batch touches (a ping covers a strip, the grid a whole survey area); each cell's sum
+        # is formed first, in the order of the points, then added, as a whole-grid bincount would.
+        cells, index = np.unique(flat, return_inverse=True)
+        self.total[cells] += np.bincount(index, weights=pts[ok, 2], minlength=cells.size)
+        self.count[cells] += np.bincount(index, minlength=cells.size)
 
     def depth(self) -> NDArray[np.float64]:
         """Mean sounding depth per cell; NaN where no sounding fell."""

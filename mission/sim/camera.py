@@ -25,7 +25,10 @@ the degradations apply to the averaged image. With the default 1, each pixel is 
 OpenGL's mipmapped filtering, which lets a seabed texture finer than the pixels alias.
 
 `StereoFrame.depth_left` is the renderer's depth buffer: ground truth for tests and benchmarks only. Perception
-plug-ins are handed the images, K, the baseline and the pose prior, never the depth.
+plug-ins are handed the images, K, the baseline and the pose prior, never the depth. A camera built with
+`depth=False` (the simulated vehicle's) neither reads the depth buffer back nor converts it, unless turbidity needs
+it, and its frames carry an empty `depth_left`: the read-back and the conversion cost about a third of a pair's
+post-processing.
 
 Off-screen GL: EGL, falling back to OSMesa (`MUJOCO_GL=osmesa` tries OSMesa first); `MESA_SHADER_CACHE_DIR` is
 pointed at a temporary folder when unset, so that Mesa does not write under the user's home.
@@ -102,8 +105,8 @@ class StereoFrame:
     T_world_left: Array
     """(4, 4) left camera → world (NED); camera axes per OpenCV."""
     depth_left: NDArray[np.float32]
-    """(H, W) rendered depth along the left camera's z (m), inf where nothing is seen. FOR TESTS ONLY: ground
-    truth that perception must never be given."""
+    """(H, W) rendered depth along the left camera's z (m), inf where nothing is seen; (0, 0) from a camera built
+    with `depth=False`. FOR TESTS ONLY: ground truth that perception must never be given."""
 
 
 def intrinsics(settings: Stereo) -> Array:
@@ -170,6 +173,10 @@ def _block_mean(image: NDArray[np.float32], k: int) -> NDArray[np.float32]:
     return np.asarray(image.reshape(h, k, w, k).mean(axis=(1, 3), dtype=np.float32), dtype=np.float32)
 
 
+_NO_DEPTH: NDArray[np.float32] = np.empty((0, 0), dtype=np.float32)
+_NO_DEPTH.setflags(write=False)  # the `depth_left` of a camera built with `depth=False`
+
+
 class StereoCamera:
     """Renders rectified stereo pairs of a world from poses of the left camera or of the vehicle.
 
@@ -181,10 +188,11 @@ class StereoCamera:
     def __init__(self, world: World | Scene | MjWorld, settings: Stereo | None = None,
                  degradations: Degradations | None = None, *, texture: Texture | None = None,
                  appearance: Appearance | None = None, lamp: Lamp | None = None, near_m: float = 0.1,
-                 far_m: float = 200.0, supersample: int = 1) -> None:
+                 far_m: float = 200.0, supersample: int = 1, depth: bool = True) -> None:
         """`world`: a world file's model, a scene or a plain `MjWorld` (the seabed texture comes from `texture`,
         else the world's or scene's own). The camera compiles its own model with the appearance, sized for its
-        images. `supersample`: render k× larger and average k×k blocks (see the module docstring)."""
+        images. `supersample`: render k× larger and average k×k blocks (see the module docstring). `depth`: read
+        the depth buffer back into `StereoFrame.depth_left` (False: an empty array, and less work per pair)."""
         if not isinstance(supersample, int) or supersample < 1:
             raise ValueError(f"supersample must be a whole number >= 1, got {supersample!r}")
         if isinstance(world, World):
@@ -201,6 +209,7 @@ class StereoCamera:
         self.K = intrinsics(self.settings)
         self.near_m, self.far_m = near_m, far_m
         self.supersample = supersample
+        self.depth = depth
         w, h = self.settings.width, self.settings.height
         # The rendered frustum is the images' (same fx/W ratio): only the number of samples per pixel changes.
         w_gl, h_gl = supersample * w, supersample * h
@@ -261,17 +270,19 @@ class StereoCamera:
         centre = T_world_left[:3, 3] + 0.5 * self.baseline * T_world_left[:3, 0]
         self._set_lamp(ned_to_mj(centre), R[:, 2])
         images, depths = [], []
+        with_depth = self.depth or self.degradations.turbidity_per_m > 0
         for offset in (0.0, self.baseline):
             self._set_camera(ned_to_mj(T_world_left[:3, 3] + offset * T_world_left[:3, 0]), R)
             mujoco.mjr_render(self._rect, scene, self._context)
-            mujoco.mjr_readPixels(self._rgb, self._depth, self._rect, self._context)
-            rgb, buf = self._rgb[::-1], self._depth[::-1]  # OpenGL rows run bottom-up
+            mujoco.mjr_readPixels(self._rgb, self._depth if with_depth else None, self._rect, self._context)
+            rgb = self._rgb[::-1]  # OpenGL rows run bottom-up
             grey = np.asarray(rgb @ np.array([0.299, 0.587, 0.114], dtype=np.float32), dtype=np.float32)
-            z = self._metric_depth(buf)
+            z = self._metric_depth(self._depth[::-1]) if with_depth else _NO_DEPTH
             if self.supersample > 1:
-                grey, z = _block_mean(grey, self.supersample), _block_mean(z, self.supersample)
+                grey = _block_mean(grey, self.supersample)
+                z = _block_mean(z, self.supersample) if with_depth else z
             images.append(self._degrade(grey, z))
-            depths.append(z)
+            depths.append(z if self.depth else _NO_DEPTH)
         return StereoFrame(images[0], images[1], self.K.copy(), self.baseline, T_world_left.copy(), depths[0])
 
     def _cull_tiles(self, T_world_left: Array) -> None:

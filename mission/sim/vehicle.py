@@ -219,7 +219,7 @@ class SimulatedVehicle:
             from mission.sim.mjworld import mjworld_for
 
             self.camera = StereoCamera(mjworld_for(self.scene), self.mission.sensors.stereo,
-                                       texture=self.scene.texture)
+                                       texture=self.scene.texture, depth=False)  # no one reads it here
         if "stereo" in sensors:
             self.next_frame = max(self.next_frame, self.truth.time)
         if "scanner" in sensors and self.scanner is None and self.mission.sensors.scanner is not None:

@@ -216,3 +216,22 @@ def test_supersampling_averages_samples_without_moving_the_image(centred: Stereo
         assert laplace(ours.astype(float)).std() < laplace(plain.astype(float)).std()
     flat = np.abs(laplace(centred.depth_left.astype(float))) < 1e-3  # away from depth edges
     assert np.median(np.abs(frame.depth_left - centred.depth_left)[flat]) < 0.001
+
+
+def test_a_camera_without_depth_renders_the_same_images_and_an_empty_depth(camera: StereoCamera,
+                                                                         centred: StereoFrame) -> None:
+    with StereoCamera(load_world(REFERENCE_WORLD), Stereo(width=1200, height=900, fx=1000.0, baseline=0.25),
+                      depth=False) as lean:
+        frame = lean.render(centred.T_world_left)
+        assert frame.depth_left.shape == (0, 0)
+        np.testing.assert_array_equal(frame.left, centred.left)
+        np.testing.assert_array_equal(frame.right, centred.right)
+        # turbidity needs the depth: it is read back for it, and the picture is the one a camera with depth makes
+        lean.degradations = camera.degradations = Degradations(turbidity_per_m=0.2)
+        try:
+            murky, reference = lean.render(centred.T_world_left), camera.render(centred.T_world_left)
+        finally:
+            camera.degradations = Degradations()
+        assert murky.depth_left.shape == (0, 0)
+        np.testing.assert_array_equal(murky.left, reference.left)
+        assert float(murky.left.std()) < float(centred.left.std())
