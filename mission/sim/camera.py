@@ -30,6 +30,11 @@ plug-ins are handed the images, K, the baseline and the pose prior, never the de
 it, and its frames carry an empty `depth_left`: the read-back and the conversion cost about a third of a pair's
 post-processing.
 
+Anti-aliasing (`antialias`, on by default): the off-screen buffer has 4 samples per pixel, so the edges of
+geometry (object outlines) are averaged over the pixel as a sensor would; textures are filtered either way. Off,
+a pair costs about half on a software renderer (llvmpipe: ~65 → ~30 ms per 1200×900 image here), and only pixels
+on geometry edges change (~0.4 % of a view of the manifold, by up to a few tens of grey levels).
+
 Off-screen GL: EGL, falling back to OSMesa (`MUJOCO_GL=osmesa` tries OSMesa first); `MESA_SHADER_CACHE_DIR` is
 pointed at a temporary folder when unset, so that Mesa does not write under the user's home.
 """
@@ -188,11 +193,13 @@ class StereoCamera:
     def __init__(self, world: World | Scene | MjWorld, settings: Stereo | None = None,
                  degradations: Degradations | None = None, *, texture: Texture | None = None,
                  appearance: Appearance | None = None, lamp: Lamp | None = None, near_m: float = 0.1,
-                 far_m: float = 200.0, supersample: int = 1, depth: bool = True) -> None:
+                 far_m: float = 200.0, supersample: int = 1, depth: bool = True, antialias: bool = True) -> None:
         """`world`: a world file's model, a scene or a plain `MjWorld` (the seabed texture comes from `texture`,
         else the world's or scene's own). The camera compiles its own model with the appearance, sized for its
         images. `supersample`: render k× larger and average k×k blocks (see the module docstring). `depth`: read
-        the depth buffer back into `StereoFrame.depth_left` (False: an empty array, and less work per pair)."""
+        the depth buffer back into `StereoFrame.depth_left` (False: an empty array, and less work per pair).
+        `antialias`: 4× multisampling of geometry edges (False: about half the cost of a pair; see the module
+        docstring)."""
         if not isinstance(supersample, int) or supersample < 1:
             raise ValueError(f"supersample must be a whole number >= 1, got {supersample!r}")
         if isinstance(world, World):
@@ -214,7 +221,8 @@ class StereoCamera:
         # The rendered frustum is the images' (same fx/W ratio): only the number of samples per pixel changes.
         w_gl, h_gl = supersample * w, supersample * h
         self.world = MjWorld(scene, offscreen=(w_gl, h_gl), near_m=near_m, far_m=far_m,
-                             appearance=appearance or Appearance(seabed=texture or scene.texture))
+                             appearance=appearance or Appearance(seabed=texture or scene.texture),
+                             offsamples=4 if antialias else 0)
         self._rng = np.random.default_rng(self.degradations.seed)
         self._rect = mujoco.MjrRect(0, 0, w_gl, h_gl)
         self._gl = _gl_context(w_gl, h_gl)

@@ -5,6 +5,7 @@ executive sees only the estimate.
 
 from __future__ import annotations
 
+import functools
 import math
 import random
 from collections.abc import Callable
@@ -104,12 +105,13 @@ class SimulatedVehicle:
         self.on_event: EmitFn | None = None  # the runner's event log: fault_started / fault_ended
         self.row_sink: Callable[[tuple[object, ...]], None] | None = None  # each log row as it is made (streaming)
         self._last_output: dict[str, Any] = {}  # each payload sensor's last output (what a frozen one repeats)
+        self._floor = functools.lru_cache(maxsize=1)(scene.surface.depth_at)  # asked thrice a step at one place
         self._measure()
 
     # -- sensors ---------------------------------------------------------------------------------------------
     def true_altitude(self) -> float:
         t = self.truth
-        return self.scene.altitude(t.north, t.east, t.depth)
+        return self._floor(t.north, t.east) - t.depth  # `Scene.altitude`, with the floor looked up once a step
 
     def _measure(self) -> None:
         t = self.truth
@@ -283,7 +285,7 @@ class SimulatedVehicle:
             hover = (gain * en, gain * ee)
         kinematics.step(t, cmd.heading, cmd.speed, depth_cmd, self.heading_meas, self.depth_meas, v,
                         self.scene.current, dt, hover)
-        floor = self.scene.surface.depth_at(t.north, t.east)
+        floor = self._floor(t.north, t.east)
         if t.depth > floor:  # the kinematic model cannot pass through the seabed; count the contact
             t.depth = floor
             self.log.seabed_contacts += 1
