@@ -5,17 +5,23 @@ import json
 
 import pytest
 from conftest import MISSIONS
+from test_missions_smoke import check_smoke_run, validated
 
 from mission import load_mission, simulate
 
 WALL_FIELDS = ("wall_time_s", "realtime_factor", "plugins")
+PATH = MISSIONS / "manifold_referencing.yaml"
 
 
 @pytest.fixture(scope="module")
 def run(tmp_path_factory):
+    """The mission's one run, with plots: the smoke test leaves this mission to this file."""
     pytest.importorskip("cv2")
-    mission = load_mission(MISSIONS / "manifold_referencing.yaml")
-    return simulate(mission, out=tmp_path_factory.mktemp("ref") / "run", plots=False)
+    return simulate(validated(PATH), out=tmp_path_factory.mktemp("ref") / "run", plots=True)
+
+
+def test_the_mission_validates_simulates_and_passes_every_missions_smoke_checks(run):
+    check_smoke_run(PATH, load_mission(PATH), run, run.out)
 
 
 def test_the_manifold_is_referenced_within_2_cm_at_3_to_4_m(run):
@@ -60,7 +66,7 @@ def _without_wall_times(metrics: dict) -> str:
 def test_a_second_run_of_the_seed_repeats_the_first_exactly_plugin_workers_and_all(run, tmp_path):
     """The simulator charges each plug-in call a modelled latency, never what its CPU took on this machine (which
     varies with the machine and its load), so a seeded run repeats exactly."""
-    again = simulate(load_mission(MISSIONS / "manifold_referencing.yaml"), out=tmp_path / "run", plots=False)
+    again = simulate(load_mission(PATH), out=tmp_path / "run", plots=False)
     assert run.metrics["plugins"]["referencing"]["calls"] >= 3  # the plug-in really ran, in its worker
     assert (tmp_path / "run" / "trajectory.csv").read_bytes() == (run.out / "trajectory.csv").read_bytes()
     assert _without_wall_times(again.metrics) == _without_wall_times(run.metrics)
