@@ -29,9 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from mission.language.viewpoints import FOOTPRINT_M  # the planning-time check's footprint: one definition
+
 Array = NDArray[np.float64]
 
-FOOTPRINT_M = 1.0  # horizontal radius under the vehicle in which a known point counts (`language.viewpoints`)
 SIGHT_RADIUS_M = 0.3  # a known point this close (horizontally) under the line of sight may block it
 HEADING_STEP_DEG = 5.0  # oblique viewpoints are tried round the target at this step
 
