@@ -46,7 +46,7 @@ class InspectSettings:
     # photographs
     max_range_ratio: float = 1.25  # a viewpoint raised over something too high keeps the target at most this much
     # farther than its standoff (the target still fits the image, its detail ≥ 80 % of the design's); else oblique
-    altimeter_samples: int = 10  # altimeter readings while settling at a viewpoint that make its ground known
+    altimeter_samples: int = 5  # altimeter readings while settling at a viewpoint that make its ground known
     altimeter_margin_m: float = 0.05  # measured ground is raised by three times the readings' spread, at least this
     viewpoint_replan_m: float = 0.02  # a viewpoint planned again moves the vehicle when it moves more than this
     viewpoint_replans: int = 2  # at most this many re-plans of one target's viewpoint
