@@ -101,11 +101,15 @@ class TargetVisit:
         return True
 
     def _check_ground(self, nav: NavState) -> bool:
-        """After settling: keep what the altimeter saw as known ground and plan again; True when the viewpoint
-        moved (the vehicle goes there and settles again)."""
+        """After settling: when the ground the altimeter saw is, on its median, too high for the viewpoint (the
+        floor binds), keep it as known ground and plan again; True when the viewpoint moved (the vehicle goes
+        there and settles again)."""
         s = self.settings
         samples, self.ground = np.asarray(self.ground, dtype=float), []
         if len(samples) < s.altimeter_samples or self.replans >= s.viewpoint_replans:
+            return False
+        viewpoint_depth = float(transform_points(self.place.T_wo, self.viewpoint[None, :])[0, 2])
+        if float(np.median(samples[:, 2])) - viewpoint_depth >= self.surroundings.floor_m:
             return False
         self.surroundings.measure(self.place.T_wo, samples, s.altimeter_margin_m)
         if not self._plan(nav.time, "replanned"):
