@@ -65,13 +65,14 @@ def _databases() -> list[tuple[Path, Path, str]]:
 DATABASES = _databases()
 
 
-def test_every_world_has_a_mission_whose_database_it_places():
+def test_every_world_has_a_mission_whose_database_it_places() -> None:
     assert {w.resolve() for w in WORLDS} <= {world for _, world, _ in DATABASES}
 
 
 @pytest.mark.parametrize(("mission_path", "world_path", "object_id"), DATABASES,
                          ids=[f"{m.name}:{o}" for m, _, o in DATABASES])
-def test_characteristic_points_lie_on_top_corners_of_the_objects_parts(mission_path, world_path, object_id):
+def test_characteristic_points_lie_on_top_corners_of_the_objects_parts(mission_path: Path, world_path: Path,
+                                                                        object_id: str) -> None:
     # Seed 002 §3.1: characteristic points are corners a Harris detector finds; the worlds put a box's top corner
     # under each point of the database, in the object's own frame.
     obj = next(o for o in _world(world_path).objects if o.database == object_id)
@@ -85,7 +86,7 @@ def test_characteristic_points_lie_on_top_corners_of_the_objects_parts(mission_p
 
 
 @pytest.mark.parametrize("world_path", WORLDS, ids=[w.name for w in WORLDS])
-def test_every_object_rests_on_the_seabed(world_path):
+def test_every_object_rests_on_the_seabed(world_path: Path) -> None:
     # The seabed under an object's lowest part (mean over its hull's corners) lies between its bottom and top:
     # nothing floats above the seabed, nothing is buried under it.
     world = _world(world_path)
