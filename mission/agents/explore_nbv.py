@@ -1,6 +1,7 @@
 """Next-best-view scanning of one object (seed 002 §2.2.2) for the `explore` agent: the planner for a scanner
 fixed to the hull, the object's region that the frontier and contour terms count, scanner frames as the planner
-takes them, and the record of one object's exploration (`TargetRun`) with the map's own coverage estimate."""
+takes them, and the record of one object's exploration (`TargetRun`) with the map's own estimate of how much of
+the object's surface it has observed (`planners.nbv.completeness` over the object's region above the seabed)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mission.agents.explore_region import Target, exploration_box, prior_map, seabed_depth, survey_map_for
+from mission.agents.explore_region import (
+    Target,
+    exploration_box,
+    prior_map,
+    seabed_depth,
+    seabed_plane,
+    survey_map_for,
+)
 from mission.agents.report import ExploredObject
 from mission.frames import rotation_zyx
 from mission.knowledge import Knowledge
@@ -26,12 +34,18 @@ from planners.nbv import (
     Weights,
     is_safe_view,
     segment_safe,
+    surface_completeness,
 )
 
 FOCUS_MARGIN_M = 1.5  # the object's region: its footprint's circle and its height grown by this much
 RESOLUTION_M = 0.25
 PRIOR_UNCERTAIN_M = 0.5  # the survey's soundings are 0.5 m cell means: the last 0.5 m above them stays unknown
 MIN_UNKNOWN = 4  # a view that would reveal fewer unknown voxels of the object's region is not worth the move
+SHORTLIST = 60
+"""Candidates cast with every planning ray after the sparse pre-screen (`NbvPlanner.shortlist`)."""
+SEABED_BAND_M = 0.3
+"""Voxels whose centre lies within this of the seabed (the survey's plane under the object) belong to the seabed
+for the completeness estimate: the seabed's own returns and shadows are not the object's surface."""
 
 
 @dataclass
@@ -72,6 +86,15 @@ def object_region(grid: StateGrid, target: Target, seabed: float) -> np.ndarray:
     return np.asarray((near & level).reshape(grid.shape))
 
 
+def surface_region(grid: StateGrid, focus: np.ndarray, plane: tuple[float, float, float]) -> np.ndarray:
+    """The object's region (`focus`) without the seabed: voxels whose centre lies more than `SEABED_BAND_M` above
+    the seabed plane depth = a + b·north + c·east."""
+    ijk = np.indices(grid.shape).reshape(3, -1).T
+    c = grid.centres(ijk)
+    seabed = plane[0] + plane[1] * c[:, 0] + plane[2] * c[:, 1]
+    return np.asarray(focus & (c[:, 2] < seabed - SEABED_BAND_M).reshape(grid.shape))
+
+
 def scan_of(frame: ScanFrame) -> Scan:
     """A scanner frame placed at its estimated pose (flat attitude), as the planner takes it."""
     origin = np.array([frame.north, frame.east, frame.depth])
@@ -106,30 +129,22 @@ class TargetRun:
     focus_done_at: float | None = None
     """When the object's region had nothing left to reveal (then the whole box is explored)."""
 
-    def object_voxels(self) -> np.ndarray:
-        """Flat grid ids of the occupied voxels that belong to the object (above the seabed, over its footprint)."""
-        grid = self.planner.grid
-        ids = grid.occupied_ids
-        c = grid.centres(np.stack(np.unravel_index(ids, grid.shape), axis=1))
-        t = self.target
-        near = np.hypot(c[:, 0] - t.north, c[:, 1] - t.east) <= t.radius + 1.5
-        return np.asarray(ids[near & (c[:, 2] < self.seabed - 0.4)])
+    region: np.ndarray | None = None
+    """The object's region above the seabed, where the completeness estimate counts (None: none yet)."""
 
-    def expected_voxels(self) -> float:
-        """Surface voxels the detection's box would have: its top and four sides."""
-        t, res = self.target, self.planner.grid.resolution
-        height = max(self.seabed - t.top_depth, 0.0)
-        return (t.length * t.width + 2.0 * (t.length + t.width) * height) / res**2
+    def object_voxels(self) -> np.ndarray:
+        """Flat grid ids of the occupied voxels of the object's region above the seabed."""
+        grid = self.planner.grid
+        if self.region is None:
+            return np.zeros(0, dtype=np.int64)
+        return np.asarray(grid.occupied_ids[self.region.reshape(-1)[grid.occupied_ids]])
 
     def coverage_estimate(self) -> float:
-        """The map's own estimate of the object's observed surface: the share of its mapped voxels off the open
-        contour (seen with their surroundings), times how many are mapped against what its detected box would
-        have (so that a few voxels seen early do not pass for a finished model)."""
-        ids = self.object_voxels()
-        if not len(ids):
+        """The map's own estimate of the share of the object's surface observed (`planners.nbv.completeness`):
+        its observed shell against the frontier of the unknown space joined to it, within the object's region."""
+        if self.region is None:
             return 0.0
-        open_edge = self.planner.derived.contour.reshape(-1)[ids]
-        return float((1.0 - open_edge.mean()) * min(1.0, len(ids) / max(self.expected_voxels(), 1.0)))
+        return surface_completeness(self.planner.grid.states, self.region).fraction
 
 
 def start_view(planner: FixedMountNbv, target: Target, seabed: float, here: tuple[float, float], safe: float,
@@ -161,10 +176,13 @@ def target_run(target: Target, knowledge: Knowledge, model: Scanner, weights: We
     planner = FixedMountNbv(vm, lo, hi, model, weights=weights, safe_distance=safe, seed=seed)
     planner.focus = object_region(planner.grid, target, seabed)
     planner.min_unknown = MIN_UNKNOWN  # the object's region alone holds few unknown voxels a view can reach
+    planner.shortlist = SHORTLIST
+    region = surface_region(planner.grid, planner.focus, seabed_plane(products, target, seabed))
     start = start_view(planner, target, seabed, here, safe, tilt_deg)
     if start is None:
-        return TargetRun(target, planner, lo, hi, seabed, View.at(target.centre), stop_reason="no safe starting view")
-    return TargetRun(target, planner, lo, hi, seabed, start)
+        return TargetRun(target, planner, lo, hi, seabed, View.at(target.centre), stop_reason="no safe starting view",
+                         region=region)
+    return TargetRun(target, planner, lo, hi, seabed, start, region=region)
 
 
 def path_safe(planner: NbvPlanner, points: np.ndarray, safe: float) -> bool:

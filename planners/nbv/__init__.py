@@ -14,12 +14,14 @@ from planners.nbv.explore import ExplorationLog, connect, explore, run_explorati
 from planners.nbv.grid import FREE, OCCUPIED, UNKNOWN, StateGrid
 from planners.nbv.planner import NbvPlanner, Scan
 from planners.nbv.scene import Box, Cylinder, Scene, survey_scans
+from planners.nbv.completeness import Completeness, surface_completeness
 from planners.nbv.utility import CONTOUR, FRONTIER, ViewTerms, Weights, next_best_view, utility_terms, view_utility
 from planners.nbv.views import Scanner, View, Views
 from planners.nbv.visibility import Visibility, visibility
 
 __all__ = [
     "CONTOUR",
+    "Completeness",
     "FREE",
     "OCCUPIED",
     "UNKNOWN",
@@ -52,4 +54,5 @@ __all__ = [
     "utility_terms",
     "view_utility",
     "visibility",
+    "surface_completeness",
 ]
