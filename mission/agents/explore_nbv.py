@@ -24,6 +24,7 @@ from mission.knowledge import Knowledge
 from mission.vehicle import ScanFrame
 from planners.nbv import (
     FREE,
+    OCCUPIED,
     UNKNOWN,
     NbvPlanner,
     Scan,
@@ -45,7 +46,10 @@ SHORTLIST = 60
 """Candidates cast with every planning ray after the sparse pre-screen (`NbvPlanner.shortlist`)."""
 SEABED_BAND_M = 0.3
 """Voxels whose centre lies within this of the seabed (the survey's plane under the object) belong to the seabed
-for the completeness estimate: the seabed's own returns and shadows are not the object's surface."""
+for the completeness estimate: the seabed's own returns and shadows are not the object's surface ..."""
+FOOT_BAND_M = 0.1
+"""... except, from this height up, in the columns at the object's foot (next to a column of the object's mapped
+shell): there the band holds the bottom strip of its sides, which the truth counts down to 0.1 m."""
 
 
 @dataclass
@@ -86,13 +90,15 @@ def object_region(grid: StateGrid, target: Target, seabed: float) -> np.ndarray:
     return np.asarray((near & level).reshape(grid.shape))
 
 
-def surface_region(grid: StateGrid, focus: np.ndarray, plane: tuple[float, float, float]) -> np.ndarray:
-    """The object's region (`focus`) without the seabed: voxels whose centre lies more than `SEABED_BAND_M` above
-    the seabed plane depth = a + b·north + c·east."""
+def surface_region(grid: StateGrid, focus: np.ndarray, plane: tuple[float, float, float]) -> tuple[np.ndarray,
+                                                                                                   np.ndarray]:
+    """The object's region (`focus`) above the seabed plane depth = a + b·north + c·east: the voxels whose centre
+    lies more than `SEABED_BAND_M` above it, and the band from `FOOT_BAND_M` to `SEABED_BAND_M` above it."""
     ijk = np.indices(grid.shape).reshape(3, -1).T
     c = grid.centres(ijk)
-    seabed = plane[0] + plane[1] * c[:, 0] + plane[2] * c[:, 1]
-    return np.asarray(focus & (c[:, 2] < seabed - SEABED_BAND_M).reshape(grid.shape))
+    height = (plane[0] + plane[1] * c[:, 0] + plane[2] * c[:, 1] - c[:, 2]).reshape(grid.shape)
+    return np.asarray(focus & (height > SEABED_BAND_M)), np.asarray(focus & (height > FOOT_BAND_M)
+                                                                      & (height <= SEABED_BAND_M))
 
 
 def scan_of(frame: ScanFrame) -> Scan:
@@ -120,6 +126,8 @@ class TargetRun:
     start: View
     views: list[tuple[float, float, float, float, float]] = field(default_factory=list)
     iterations_ms: list[float] = field(default_factory=list)
+    iterations_cpu_ms: list[float] = field(default_factory=list)
+    """CPU time of each iteration (propose + connect): the machine may be shared, wall time then says little."""
     integrate_ms: list[float] = field(default_factory=list)
     volume: list[tuple[float, float, float]] = field(default_factory=list)  # time, known m³, coverage estimate
     rejected: int = 0
@@ -131,6 +139,8 @@ class TargetRun:
 
     region: np.ndarray | None = None
     """The object's region above the seabed, where the completeness estimate counts (None: none yet)."""
+    foot: np.ndarray | None = None
+    """The band just above the seabed, counted in the columns at the object's foot (`FOOT_BAND_M`)."""
 
     def object_voxels(self) -> np.ndarray:
         """Flat grid ids of the occupied voxels of the object's region above the seabed."""
@@ -141,10 +151,19 @@ class TargetRun:
 
     def coverage_estimate(self) -> float:
         """The map's own estimate of the share of the object's surface observed (`planners.nbv.completeness`):
-        its observed shell against the frontier of the unknown space joined to it, within the object's region."""
+        the voxels its beams ended in against the frontier of the unknown space joined to them, within the
+        object's region (and the band at its foot)."""
         if self.region is None:
             return 0.0
-        return surface_completeness(self.planner.grid.states, self.region).fraction
+        states = self.planner.grid.states
+        region = self.region
+        if self.foot is not None:
+            shell = ((states == OCCUPIED) & region).any(axis=2)
+            near = shell.copy()  # the shell's columns and their 8 neighbours
+            for di, dj in ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)):
+                near |= np.roll(np.roll(shell, di, axis=0), dj, axis=1)
+            region = region | (self.foot & near[:, :, None])
+        return surface_completeness(states, region, self.planner.returns).fraction
 
 
 def start_view(planner: FixedMountNbv, target: Target, seabed: float, here: tuple[float, float], safe: float,
@@ -177,12 +196,12 @@ def target_run(target: Target, knowledge: Knowledge, model: Scanner, weights: We
     planner.focus = object_region(planner.grid, target, seabed)
     planner.min_unknown = MIN_UNKNOWN  # the object's region alone holds few unknown voxels a view can reach
     planner.shortlist = SHORTLIST
-    region = surface_region(planner.grid, planner.focus, seabed_plane(products, target, seabed))
+    region, foot = surface_region(planner.grid, planner.focus, seabed_plane(products, target, seabed))
     start = start_view(planner, target, seabed, here, safe, tilt_deg)
     if start is None:
         return TargetRun(target, planner, lo, hi, seabed, View.at(target.centre), stop_reason="no safe starting view",
-                         region=region)
-    return TargetRun(target, planner, lo, hi, seabed, start, region=region)
+                         region=region, foot=foot)
+    return TargetRun(target, planner, lo, hi, seabed, start, region=region, foot=foot)
 
 
 def path_safe(planner: NbvPlanner, points: np.ndarray, safe: float) -> bool:

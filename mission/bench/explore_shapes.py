@@ -14,12 +14,15 @@ Per shape: `surface_observed_percent` (the truth: `mission.sim.explore_metrics`)
 `coverage_estimate_percent` (`planners.nbv.completeness`, from its map and estimated poses only), their
 difference, the NBV iteration time (mean, max), the element's duration and why it stopped.
 
-Checks (all shapes): observed ≥ 90 %, |own − truth| ≤ 3 points, NBV iteration ≤ 1 s at most. `--quick` runs the
-template alone with a 5-minute budget (its checks then say what that short run reached).
+Checks (all shapes): observed ≥ 90 %, |own − truth| ≤ 3 points, NBV iteration (completeness estimate, propose,
+connect) ≤ 1 s at most, in CPU time: the shapes run in parallel processes on a machine that may be shared, so
+wall time (reported beside it) says more about the load than about the planner. `--quick` runs the template
+alone with a 5-minute budget (its checks then say what that short run reached).
 """
 
 from __future__ import annotations
 
+import os
 import time
 from pathlib import Path
 from typing import Any
@@ -78,6 +81,7 @@ def run_shape(name: str, budget: str | None = None, seed: int = 5, out: Path | N
     truth = obj.get("surface_observed_percent")
     own = obj.get("coverage_estimate_percent")
     it = scan.get("iteration_time_ms") or {}
+    cpu = scan.get("iteration_cpu_ms") or {}
     return {
         "object": name, "true_object": obj.get("true_object"), "completed": m["completed"],
         "status": scan["status"], "budget": budget or _shapes()[name]["budget"],
@@ -86,22 +90,26 @@ def run_shape(name: str, budget: str | None = None, seed: int = 5, out: Path | N
         "difference_points": round(own - truth, 2) if own is not None and truth is not None else None,
         "map_surface_percent": obj.get("map_surface_percent"),
         "iteration_ms": {"mean": it.get("mean"), "max": it.get("max")},
+        "iteration_cpu_ms": {"mean": cpu.get("mean"), "max": cpu.get("max")},
         "min_distance_to_object_m": scan.get("min_distance_to_object_m"),
         "safe_distance_breached": scan.get("safe_distance_breached"),
         "wall_s": round(time.perf_counter() - t0, 1)}
 
 
 def run(quick: bool) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:
+    from concurrent.futures import ProcessPoolExecutor
+
     names = ["template"] if quick else list(_shapes())
-    rows = [run_shape(n, "5min" if quick else None) for n in names]
+    with ProcessPoolExecutor(max_workers=min(len(names), os.cpu_count() or 1)) as pool:
+        rows = list(pool.map(run_shape, names, ["5min" if quick else None] * len(names)))
     observed = [r["surface_observed_percent"] or 0.0 for r in rows]
     gaps = [abs(r["difference_points"]) if r["difference_points"] is not None else float("inf") for r in rows]
-    iterations = [r["iteration_ms"]["max"] or float("inf") for r in rows]
+    iterations = [r["iteration_cpu_ms"]["max"] or float("inf") for r in rows]
     results = {"shapes": rows, "world": "mission/bench/data/explore_shapes.yaml and worlds/sps_field.yaml",
                "seed": 5}
     checks = {
         "min_surface_observed_percent": check(min(observed), ">= 90"),
         "max_estimate_error_points": check(max(gaps), "<= 3"),
-        "max_nbv_iteration_s": check(round(max(iterations) / 1e3, 3), "<= 1.0"),
+        "max_nbv_iteration_cpu_s": check(round(max(iterations) / 1e3, 3), "<= 1.0"),
     }
     return results, checks
