@@ -55,7 +55,7 @@ from planners.nbv import UNKNOWN, NbvPlanner, Scanner, View, Weights, connect
 
 PLANNING_RAYS = (24, 18)  # the planner's model of the frustum; the sensor itself has more rays
 NAV_MARGIN_M = 1.0
-COVERAGE_TARGET = 0.95
+COVERAGE_TARGET = 0.97
 MAX_REJECTIONS = 10
 HEADING_TOLERANCE_DEG = 6.0
 CLIMB_RATE = 0.35  # m/s, a conservative figure for the time needed to climb away at the end

@@ -49,7 +49,11 @@ SEABED_BAND_M = 0.3
 for the completeness estimate: the seabed's own returns and shadows are not the object's surface ..."""
 FOOT_BAND_M = 0.1
 """... except, from this height up, in the columns at the object's foot (next to a column of the object's mapped
-shell): there the band holds the bottom strip of its sides, which the truth counts down to 0.1 m."""
+shell): there the band holds the bottom strip of its sides, which the truth counts down to 0.1 m ..."""
+UNDER_PLANE_M = 0.15
+"""... and, over the object's detected footprint (grown by a voxel), down to this depth below the plane: a low
+part there (a base frame a few decimetres high) is the object's surface, with its unknown inside beneath it, not
+seabed, and the seabed under a footprint departs from the plane fitted around it by this much."""
 
 
 @dataclass
@@ -90,15 +94,21 @@ def object_region(grid: StateGrid, target: Target, seabed: float) -> np.ndarray:
     return np.asarray((near & level).reshape(grid.shape))
 
 
-def surface_region(grid: StateGrid, focus: np.ndarray, plane: tuple[float, float, float]) -> tuple[np.ndarray,
-                                                                                                   np.ndarray]:
+def surface_region(grid: StateGrid, focus: np.ndarray, plane: tuple[float, float, float],
+                   target: Target) -> tuple[np.ndarray, np.ndarray]:
     """The object's region (`focus`) above the seabed plane depth = a + b·north + c·east: the voxels whose centre
-    lies more than `SEABED_BAND_M` above it, and the band from `FOOT_BAND_M` to `SEABED_BAND_M` above it."""
+    lies more than `SEABED_BAND_M` above it or, over the target's footprint, above `UNDER_PLANE_M` below it; and
+    the band from `FOOT_BAND_M` to `SEABED_BAND_M` above it (counted at the object's foot: `TargetRun`)."""
     ijk = np.indices(grid.shape).reshape(3, -1).T
     c = grid.centres(ijk)
     height = (plane[0] + plane[1] * c[:, 0] + plane[2] * c[:, 1] - c[:, 2]).reshape(grid.shape)
-    return np.asarray(focus & (height > SEABED_BAND_M)), np.asarray(focus & (height > FOOT_BAND_M)
-                                                                      & (height <= SEABED_BAND_M))
+    a = math.radians(target.heading_deg)
+    along = (c[:, 0] - target.north) * math.cos(a) + (c[:, 1] - target.east) * math.sin(a)
+    across = -(c[:, 0] - target.north) * math.sin(a) + (c[:, 1] - target.east) * math.cos(a)
+    inside = ((np.abs(along) <= 0.5 * target.length + grid.resolution)
+              & (np.abs(across) <= 0.5 * target.width + grid.resolution)).reshape(grid.shape)
+    region = focus & ((height > SEABED_BAND_M) | (inside & (height > -UNDER_PLANE_M)))
+    return np.asarray(region), np.asarray(focus & ~region & (height > FOOT_BAND_M) & (height <= SEABED_BAND_M))
 
 
 def scan_of(frame: ScanFrame) -> Scan:
@@ -196,7 +206,7 @@ def target_run(target: Target, knowledge: Knowledge, model: Scanner, weights: We
     planner.focus = object_region(planner.grid, target, seabed)
     planner.min_unknown = MIN_UNKNOWN  # the object's region alone holds few unknown voxels a view can reach
     planner.shortlist = SHORTLIST
-    region, foot = surface_region(planner.grid, planner.focus, seabed_plane(products, target, seabed))
+    region, foot = surface_region(planner.grid, planner.focus, seabed_plane(products, target, seabed), target)
     start = start_view(planner, target, seabed, here, safe, tilt_deg)
     if start is None:
         return TargetRun(target, planner, lo, hi, seabed, View.at(target.centre), stop_reason="no safe starting view",

@@ -9,12 +9,12 @@ synthetic box-and-cylinder scene with an exact-ray-casting scanner for tests and
 
 from planners.nbv.baseline import RecedingHorizonNbv
 from planners.nbv.candidates import candidate_views, is_safe, is_safe_view
+from planners.nbv.completeness import Completeness, surface_completeness
 from planners.nbv.derived import DerivedMaps, contour_mask
 from planners.nbv.explore import ExplorationLog, connect, explore, run_exploration, segment_safe
 from planners.nbv.grid import FREE, OCCUPIED, UNKNOWN, StateGrid
 from planners.nbv.planner import NbvPlanner, Scan
 from planners.nbv.scene import Box, Cylinder, Scene, survey_scans
-from planners.nbv.completeness import Completeness, surface_completeness
 from planners.nbv.utility import CONTOUR, FRONTIER, ViewTerms, Weights, next_best_view, utility_terms, view_utility
 from planners.nbv.views import Scanner, View, Views
 from planners.nbv.visibility import Visibility, visibility
