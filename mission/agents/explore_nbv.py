@@ -137,7 +137,8 @@ class TargetRun:
     views: list[tuple[float, float, float, float, float]] = field(default_factory=list)
     iterations_ms: list[float] = field(default_factory=list)
     iterations_cpu_ms: list[float] = field(default_factory=list)
-    """CPU time of each iteration (propose + connect): the machine may be shared, wall time then says little."""
+    """CPU time of each iteration (completeness estimate + propose + connect): the machine may be shared, and wall
+    time then says more about the load than about the planner."""
     integrate_ms: list[float] = field(default_factory=list)
     volume: list[tuple[float, float, float]] = field(default_factory=list)  # time, known m³, coverage estimate
     rejected: int = 0

@@ -185,8 +185,8 @@ def seabed_plane(products: dict[str, Any] | None, target: Target, fallback: floa
         return fallback, 0.0, 0.0
     depth = np.asarray(products["depth"], dtype=float)
     cell, n0, e0 = float(products["cell"]), float(products["north0"]), float(products["east0"])
-    nn = n0 + np.arange(depth.shape[0])[:, None] * cell + 0.0 * depth
-    ee = e0 + np.arange(depth.shape[1])[None, :] * cell + 0.0 * depth
+    nn = np.broadcast_to(n0 + np.arange(depth.shape[0])[:, None] * cell, depth.shape)
+    ee = np.broadcast_to(e0 + np.arange(depth.shape[1])[None, :] * cell, depth.shape)
     r = np.hypot(nn - target.north, ee - target.east)
     use = np.isfinite(depth) & (r >= target.radius + ring[0]) & (r <= target.radius + ring[1])
     if use.sum() < 12:

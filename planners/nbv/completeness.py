@@ -10,15 +10,16 @@ region (`region`: a mask the caller gives, without the seabed):
 * `observed`: occupied voxels (or, given them, the voxels where beams ended) with a known-free face neighbour:
   the surface seen from outside, one voxel per 0.25 m patch (voxels behind them, which navigation error between
   views smears in, do not count);
-* `hidden`: frontier voxels — unknown, with a known-free face neighbour — of the unknown space that is joined
-  to the observed shell (26-connected through unknown voxels of the region, or next to it): the boundary of what
-  may still hide surface. Isolated unknown specks in swept water (between diverging beams) touch no shell and do
-  not count;
+* `hidden`: frontier voxels — unknown, with a known-free face neighbour, or running out of the region sideways
+  or upwards — of the unknown space that is joined to the occupied shell (26-connected through unknown voxels of
+  the region, or next to it): the boundary of what may still hide surface. Isolated unknown specks in swept
+  water (between diverging beams) touch no shell and do not count;
 * `fraction` = observed / (observed + hidden).
 
-A frontier in front of an unseen face has about the face's area (a thin pocket) or a little more (a deeper one),
-so the fraction leans low while large faces are missing, and tracks the truth closely once only gaps, undersides
-and strips are left, which is where a stopping rule reads it.
+While whole sides are unseen the fraction leans high (their unknown pockets are only partly bounded by swept
+water inside the region: ~14 points on the tests' L-shape); once only gaps, undersides and strips are left it
+tracks the truth within a few points, which is where a stopping rule reads it. Surface that navigation error
+between views has the map hold as free water is beyond any count of this map.
 
 >>> import numpy as np
 >>> s = np.zeros((7, 7, 7), dtype=np.int8)
