@@ -1,0 +1,91 @@
+"""Files of `auv reconstruct`: the mesh as PLY and glTF binary (trimesh), the point cloud as PLY, and a shaded
+picture of the mesh (matplotlib, orthographic, painter's algorithm)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mission.extras import require
+
+if TYPE_CHECKING:
+    from perception_plugins.reconstruction import Mesh
+
+# NED (north, east, down) → a y-up frame for glTF viewers: x = east, y = up, z = south... kept right-handed.
+R_GLTF_NED = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])
+
+
+def _trimesh(mesh: Mesh, R: NDArray[np.float64] | None = None) -> Any:
+    require("trimesh", "writing meshes (`auv reconstruct`)")
+    import trimesh
+
+    grey = np.clip(mesh.grey, 0, 255).astype(np.uint8)
+    colours = np.column_stack([grey, grey, grey, np.full(len(grey), 255, np.uint8)])
+    vertices = mesh.vertices if R is None else mesh.vertices @ R.T
+    return trimesh.Trimesh(vertices, mesh.faces, vertex_colors=colours, process=False)
+
+
+def write_mesh(mesh: Mesh, out: Path) -> None:
+    """`mesh.ply` in the world (NED) frame and `mesh.glb` in glTF's y-up frame (x east, y up, z south)."""
+    _trimesh(mesh).export(out / "mesh.ply")
+    _trimesh(mesh, R_GLTF_NED).export(out / "mesh.glb")
+
+
+def write_points(points: NDArray[np.float64], grey: NDArray[np.floating[Any]], path: Path) -> None:
+    """A binary little-endian PLY of points (world frame) with grey colours."""
+    g = np.clip(np.asarray(grey), 0, 255).astype(np.uint8)
+    record = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("red", "u1"), ("green", "u1"), ("blue", "u1")])
+    data = np.empty(len(points), dtype=record)
+    data["x"], data["y"], data["z"] = points[:, 0], points[:, 1], points[:, 2]
+    data["red"] = data["green"] = data["blue"] = g
+    header = ("ply\nformat binary_little_endian 1.0\n"
+              f"element vertex {len(points)}\n"
+              "property float x\nproperty float y\nproperty float z\n"
+              "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n")
+    with path.open("wb") as f:
+        f.write(header.encode("ascii"))
+        f.write(data.tobytes())
+
+
+def render_picture(mesh: Mesh, path: Path, title: str = "", azimuth_deg: float = 210.0,
+                   elevation_deg: float = 35.0) -> None:
+    """A shaded orthographic picture of the mesh seen from `azimuth` (from north, clockwise) and `elevation`."""
+    require("matplotlib", "the mesh picture (`auv reconstruct`)")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import PolyCollection
+
+    a, e = math.radians(azimuth_deg), math.radians(elevation_deg)
+    view = np.array([math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), -math.sin(e)])  # towards the viewer
+    right = np.array([-math.sin(a), math.cos(a), 0.0])
+    up = np.cross(view, right)
+    v = mesh.vertices - mesh.vertices.mean(axis=0)
+    xy = np.column_stack([v @ right, v @ up])
+    tri = mesh.faces
+    n = np.cross(v[tri[:, 1]] - v[tri[:, 0]], v[tri[:, 2]] - v[tri[:, 0]])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    light = view + 0.5 * up
+    shade = 0.25 + 0.75 * np.abs(n @ (light / np.linalg.norm(light)))
+    grey = mesh.grey[tri].mean(axis=1) / 255.0
+    order = np.argsort(v[tri].mean(axis=1) @ view)  # far first
+    colours = np.clip((0.35 + 0.65 * grey) * shade, 0, 1)[order]
+    fig, ax = plt.subplots(figsize=(8, 6), dpi=120)
+    ax.add_collection(PolyCollection(xy[tri[order]], facecolors=np.repeat(colours[:, None], 3, axis=1),
+                                     edgecolors="none", antialiased=False))
+    ax.set_xlim(xy[:, 0].min(), xy[:, 0].max())
+    ax.set_ylim(xy[:, 1].min(), xy[:, 1].max())
+    ax.set_aspect("equal")
+    ax.set_axis_off()
+    ax.set_title(title)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+__all__ = ["R_GLTF_NED", "render_picture", "write_mesh", "write_points"]
