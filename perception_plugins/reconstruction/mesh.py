@@ -75,8 +75,11 @@ def mesh_from_volume(vol: DenseVolume, min_weight: float = 0.0) -> Mesh:
     """Marching cubes on a dense volume (see the module docstring)."""
     from skimage.measure import marching_cubes
 
-    mask = _observed_cubes(vol.weight, min_weight)
-    if not mask.any() or vol.tsdf[mask].min() >= 0 or vol.tsdf[mask].max() <= 0:
+    cubes = _observed_cubes(vol.weight, min_weight)
+    # scikit-image gates the cube starting at (i, j, k) by mask[i + 1, j + 1, k + 1] (its far corner).
+    mask = np.zeros_like(cubes)
+    mask[1:, 1:, 1:] = cubes[:-1, :-1, :-1]
+    if not cubes.any() or vol.tsdf[cubes].min() >= 0 or vol.tsdf[cubes].max() <= 0:
         return Mesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), np.zeros(0, np.float32),
                     np.zeros(0, np.float32))
     verts, faces, _, _ = marching_cubes(vol.tsdf, level=0.0, mask=mask, allow_degenerate=False)
