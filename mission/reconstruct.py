@@ -8,6 +8,9 @@ frame; camera axes per OpenCV). The pose must be the *estimated* one: `nav.txt` 
 simulator's recorder writes the truth to `poses.txt` and navigation's estimate to `nav.txt`), else `poses.txt`.
 The folder is looked for, in order, at RUN/models/ID, RUN/model/ID, RUN/stereo/ID, RUN/ID and RUN/stereo.
 
+The seabed is the plane most mesh vertices lie on (RANSAC); vertices more than `OBJECT_HEIGHT_M` above it are the
+object, and the outputs keep the object with `SEABED_MARGIN_M` of seabed around its footprint.
+
 Outputs in the output folder (default RUN/models/ID/reconstruction): `mesh.ply` and `mesh.glb` (the cleaned mesh
 with grey vertex colours, through trimesh), `points.ply` (the range maps' points, every 4th pixel, in the world
 frame), `report.json` (frames, timings, mesh size, the seabed plane and the object's extent above it) and
@@ -28,6 +31,12 @@ from numpy.typing import NDArray
 from mission.errors import AuvError
 
 Array = NDArray[np.float64]
+OBJECT_HEIGHT_M = 0.1
+"""Mesh vertices this far above the fitted seabed plane belong to the object."""
+MATCH_WIDTH_PX = 600
+"""Images are matched shrunk by the whole factor that brings them nearest this width."""
+SEABED_MARGIN_M = 1.0
+"""Seabed kept around the object's footprint in the outputs."""
 SEARCH = ("models/{id}", "model/{id}", "stereo/{id}", "{id}", "stereo")
 
 
@@ -90,27 +99,22 @@ def read_recording(folder: Path) -> Recording:
     return Recording(folder, K, float(baseline), poses, pose_file, left, right)
 
 
-def seabed_plane(points: Array, iterations: int = 200, tolerance: float = 0.05, seed: int = 0) -> Array:
-    """(a, b, c) of the plane depth = a·north + b·east + c holding the most points within `tolerance`, refitted
-    by least squares on them (RANSAC; the seabed is the largest flat surface the views see)."""
-    rng = np.random.default_rng(seed)
+def seabed_plane(points: Array, tolerance: float = 0.05, rounds: int = 3) -> Array:
+    """(a, b, c) of the seabed plane depth = a·north + b·east + c: least squares on the points within
+    `tolerance` of the current plane, started from the horizontal plane at the most common depth (2 cm bins;
+    the seabed is the largest surface the views see, and the object only rises above it)."""
+    z = points[:, 2]
+    edges = np.arange(z.min(), z.max() + 0.04, 0.02)
+    counts, edges = np.histogram(z, bins=edges) if len(edges) > 1 else (np.ones(1), np.array([z.min(), z.max()]))
+    k = int(np.argmax(counts))
+    plane = np.array([0.0, 0.0, 0.5 * (edges[k] + edges[k + 1])])
     A = np.column_stack([points[:, 0], points[:, 1], np.ones(len(points))])
-    best, best_count = np.array([0.0, 0.0, float(np.median(points[:, 2]))]), -1
-    for _ in range(iterations):
-        pick = rng.choice(len(points), 3, replace=False)
-        try:
-            coef = np.linalg.solve(A[pick], points[pick, 2])
-        except np.linalg.LinAlgError:
-            continue
-        if np.hypot(coef[0], coef[1]) > 0.3:  # steeper than ~17°: a side of the object, not the seabed
-            continue
-        count = int(np.sum(np.abs(A @ coef - points[:, 2]) < tolerance))
-        if count > best_count:
-            best, best_count = coef, count
-    inliers = np.abs(A @ best - points[:, 2]) < tolerance
-    if inliers.sum() >= 3:
-        best = np.linalg.lstsq(A[inliers], points[inliers, 2], rcond=None)[0]
-    return np.asarray(best)
+    for _ in range(rounds):
+        inliers = np.abs(A @ plane - z) < tolerance
+        if inliers.sum() < 3:
+            break
+        plane = np.linalg.lstsq(A[inliers], z[inliers], rcond=None)[0]
+    return np.asarray(plane)
 
 
 def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
@@ -119,7 +123,7 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     import cv2
 
     from mission.reconstruct_io import render_picture, write_mesh, write_points
-    from perception_plugins.reconstruction import ReconstructionSettings, fuse_views, points_from_range
+    from perception_plugins.reconstruction import RangeSettings, ReconstructionSettings, fuse_views, points_from_range
 
     recording = read_recording(find_recording(run_dir, object_id))
     out = out_dir or run_dir / "models" / object_id / "reconstruction"
@@ -134,7 +138,10 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
             yield pair[0], pair[1], T
 
     t0 = time.perf_counter()
-    result = fuse_views(views(), recording.K, recording.baseline, ReconstructionSettings(voxel_m=voxel_m), maps)
+    # Match at about 600 pixels across (1200×900 pairs at half resolution; small images as they are).
+    scale = max(1, int(round(2.0 * recording.K[0, 2] / MATCH_WIDTH_PX)))
+    settings = ReconstructionSettings(voxel_m=voxel_m, range=RangeSettings(scale=scale))
+    result = fuse_views(views(), recording.K, recording.baseline, settings, maps)
     if len(result.mesh.faces) == 0:
         raise ReconstructionError(f"{recording.folder}: the range maps yield no surface")
     clouds, greys = [], []
@@ -147,13 +154,21 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     plane = seabed_plane(result.mesh.vertices)
     mesh = result.mesh
     height = plane[0] * mesh.vertices[:, 0] + plane[1] * mesh.vertices[:, 1] + plane[2] - mesh.vertices[:, 2]
-    above = mesh.vertices[height > 0.1]
+    above = mesh.vertices[height > OBJECT_HEIGHT_M]
+    if len(above):  # keep the object and the seabed around its foot, not the seabed to the edge of the views
+        lo, hi = above[:, :2].min(axis=0) - SEABED_MARGIN_M, above[:, :2].max(axis=0) + SEABED_MARGIN_M
+        inside = np.all((mesh.vertices[:, :2] >= lo) & (mesh.vertices[:, :2] <= hi), axis=1)
+        mesh = mesh.subset(inside[mesh.faces].all(axis=1))
+        keep = np.all((points[:, :2] >= lo) & (points[:, :2] <= hi), axis=1)
+        points, point_grey = points[keep], np.concatenate(greys)[keep]
+    else:
+        point_grey = np.concatenate(greys)
     write_mesh(mesh, out)
-    write_points(points, np.concatenate(greys), out / "points.ply")
+    write_points(points, point_grey, out / "points.ply")
     render_picture(mesh, out / "mesh.png", title=f"{object_id}: {len(mesh.faces):,} triangles")
     report: dict[str, Any] = {
         "object": object_id, "recording": str(recording.folder), "pose_file": recording.pose_file,
-        "frames": result.frames, "voxel_m": voxel_m,
+        "frames": result.frames, "voxel_m": voxel_m, "match_scale": scale,
         "triangles": int(len(mesh.faces)), "triangles_before_cleaning": int(len(result.raw_mesh.faces)),
         "area_m2": round(float(mesh.face_areas().sum()), 3),
         "seabed_plane": {"a": float(plane[0]), "b": float(plane[1]), "c": float(plane[2]),
@@ -164,7 +179,7 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
                     "fusion_per_frame": float(np.median(result.fusion_s)),
                     "extract_and_clean": result.extract_s, "wall_total": time.perf_counter() - t0},
         "volume_mb": round(result.volume.nbytes / 1e6, 2),
-        "files": ["mesh.ply", "mesh.glb", "points.ply", "mesh.png", "report.json"],
+        "files": ["mesh.ply", "mesh.glb", "points.ply", "mesh.png", "report.json"], "out": str(out),
     }
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
     return report

@@ -41,19 +41,19 @@ from mission.bench.reconstruction_scenes import (
 WIDTH, HEIGHT, FX, BASELINE = 1200, 900, 1000.0, 0.25
 DISTANCE = 5.5
 FULL_RINGS = ((20.0, 12), (45.0, 8), (75.0, 4))
-QUICK_RINGS = ((25.0, 6), (60.0, 3))
+QUICK_RINGS = ((30.0, 4), (65.0, 2))
 MARGIN = 0.5
 """Metres around the object's box that are reconstructed too (and scored: the seabed around its foot)."""
 
 
-def _evaluate(mesh: Any, parts: list[Any], exposed: np.ndarray, region: tuple[np.ndarray, np.ndarray]
-              ) -> dict[str, Any]:
+def _evaluate(mesh: Any, parts: list[Any], exposed: np.ndarray, region: tuple[np.ndarray, np.ndarray],
+              max_samples: int = 600_000) -> dict[str, Any]:
     from scipy.spatial import cKDTree
 
     if len(mesh.faces) == 0:
         return {"median_m": None, "p90_m": None, "completeness": 0.0, "triangles": 0}
     area = float(mesh.face_areas().sum())
-    samples = mesh.sample(int(min(max(area / 1e-4, 1000), 600_000)))
+    samples = mesh.sample(int(min(max(area / 1e-4, 1000), max_samples)))
     lo, hi = region
     inside = np.all((samples[:, :2] >= lo) & (samples[:, :2] <= hi), axis=1)
     err = np.abs(truth_sdf(parts, samples[inside]))
@@ -102,7 +102,8 @@ def measure_shape(name: str, quick: bool) -> dict[str, Any]:
     cv2.setNumThreads(1)
     world = scene_world(name)
     parts = truth_parts(world)
-    exposed = exposed_surface(parts)
+    exposed = exposed_surface(parts, spacing=0.02 if quick else 0.01)
+    samples = 150_000 if quick else 600_000
     lo, hi = exposed[:, :2].min(axis=0), exposed[:, :2].max(axis=0)
     target = 0.5 * (exposed.min(axis=0) + exposed.max(axis=0))
     poses = ring_views(target, DISTANCE, QUICK_RINGS if quick else FULL_RINGS)
@@ -124,9 +125,9 @@ def measure_shape(name: str, quick: bool) -> dict[str, Any]:
         "frames": len(frames),
         "range_m": {"median": round(float(np.median(ranges)), 2), "p10": round(float(np.percentile(ranges, 10)), 2),
                     "p90": round(float(np.percentile(ranges, 90)), 2)},
-        "ours": _evaluate(ours.mesh, parts, exposed, region),
-        "ours_before_cleaning": _evaluate(ours.raw_mesh, parts, exposed, region),
-        "ours_navigation_poses": _evaluate(nav.mesh, parts, exposed, region),
+        "ours": _evaluate(ours.mesh, parts, exposed, region, samples),
+        "ours_before_cleaning": _evaluate(ours.raw_mesh, parts, exposed, region, samples),
+        "ours_navigation_poses": _evaluate(nav.mesh, parts, exposed, region, samples),
         "depth_s_per_frame": round(statistics.median(ours.depth_s), 4),
         "fusion_s_per_frame": round(statistics.median(ours.fusion_s), 4),
         "extract_and_clean_s": round(ours.extract_s, 3),
@@ -140,7 +141,7 @@ def measure_shape(name: str, quick: bool) -> dict[str, Any]:
     if o3d_mesh is None:
         out["open3d"] = "skipped: Open3D is not installed (pip install -e .[bench]; it needs libusb-1.0-0)"
     else:
-        out["open3d"] = _evaluate(o3d_mesh, parts, exposed, region)
+        out["open3d"] = _evaluate(o3d_mesh, parts, exposed, region, samples)
         out["open3d"]["fusion_s_per_frame"] = round((time.process_time() - t0) / len(frames), 4)
     return out
 

@@ -4,7 +4,7 @@ added to those views' poses, and the exact geometry to score a mesh against.
 
 The truth is analytic: the signed distance of the union of the parts and the seabed plane (boxes and cylinders in
 their own frames), so the mesh → truth distance is exact; completeness samples the parts' faces and drops the
-samples buried in the seabed or inside another part (the exposed surface).
+samples buried in the seabed, inside another part or on a face in contact with one (the exposed surface).
 """
 
 from __future__ import annotations
@@ -181,10 +181,12 @@ def exposed_surface(parts: list[TruthPart], spacing: float = 0.01, seed: int = 0
                     pts[:, axis] = sign * h[axis]
                     local.append(pts)
         world_pts = np.vstack(local) @ part.T_world_part[:3, :3].T + part.T_world_part[:3, 3]
-        keep = world_pts[:, 2] < SEABED_DEPTH - 1e-3
+        # Strictly outside the seabed and every other part: faces in contact (a part standing on another, a base
+        # on the seabed) are buried, not exposed.
+        keep = world_pts[:, 2] < SEABED_DEPTH - 2e-3
         for m, other in enumerate(parts):
             if m != n:
-                keep &= part_sdf(other, world_pts) > -1e-3
+                keep &= part_sdf(other, world_pts) > 2e-3
         samples.append(world_pts[keep])
     return np.vstack(samples)
 
