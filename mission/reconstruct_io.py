@@ -15,7 +15,7 @@ from mission.extras import require
 if TYPE_CHECKING:
     from perception_plugins.reconstruction import Mesh
 
-# NED (north, east, down) → a y-up frame for glTF viewers: x = east, y = up, z = south... kept right-handed.
+# NED (north, east, down) → glTF's y-up frame: x = east, y = up, z = south (right-handed).
 R_GLTF_NED = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])
 
 
@@ -80,7 +80,8 @@ def render_picture(mesh: Mesh, path: Path, title: str = "", azimuth_deg: float =
     shade = 0.25 + 0.75 * np.abs(n @ light)
     colour = np.clip((0.35 + 0.65 * mesh.grey[tri].mean(axis=1) / 255.0) * shade, 0.0, 1.0)
     p0, p1, p2 = px[tri[:, 0]], px[tri[:, 1]], px[tri[:, 2]]
-    area_px = 0.5 * np.abs((p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p2[:, 0] - p0[:, 0]) * (p1[:, 1] - p0[:, 1]))
+    d1, d2 = p1 - p0, p2 - p0
+    area_px = 0.5 * np.abs(d1[:, 0] * d2[:, 1] - d2[:, 0] * d1[:, 1])
     count = np.minimum(np.ceil(2.0 * area_px).astype(np.int64) + 1, 400)
     face = np.repeat(np.arange(len(tri)), count)
     rng = np.random.default_rng(0)

@@ -69,9 +69,11 @@ def _open3d(maps: list[Any], poses: list[np.ndarray], voxel: float, trunc: float
     The legacy `ScalableTSDFVolume` of open3d-cpu 0.20 extracts an empty mesh here whatever it is fed (even five
     head-on views of a plane), so the anchor is `o3d.t.geometry.VoxelBlockGrid`, the voxel-hashing TSDF that
     replaces it (8³ blocks, the same projective update), with every observed voxel meshed (weight ≥ 1)."""
-    try:
-        import open3d as o3d
-        import open3d.core as o3c
+    import importlib
+
+    try:  # Open3D's stubs do not type its tensors: through Any
+        o3d: Any = importlib.import_module("open3d")
+        o3c: Any = importlib.import_module("open3d.core")
     except ImportError:
         return None
     from perception_plugins.reconstruction import Mesh

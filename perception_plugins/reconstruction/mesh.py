@@ -82,7 +82,8 @@ def mesh_from_volume(vol: DenseVolume, min_weight: float = 0.0) -> Mesh:
     if not cubes.any() or vol.tsdf[cubes].min() >= 0 or vol.tsdf[cubes].max() <= 0:
         return Mesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), np.zeros(0, np.float32),
                     np.zeros(0, np.float32))
-    verts, faces, _, _ = marching_cubes(vol.tsdf, level=0.0, mask=mask, allow_degenerate=False)
+    verts, faces, _, _ = marching_cubes(  # type: ignore[no-untyped-call,unused-ignore]
+        vol.tsdf, level=0.0, mask=mask, allow_degenerate=False)
     # Each vertex lies on one grid edge: the axis with a fractional coordinate; read both ends' values.
     lo = np.floor(verts).astype(np.int64)
     frac = verts - lo

@@ -87,11 +87,12 @@ class HashedTsdf:
         """Rows of these block coordinates, allocating the missing ones."""
         rows = np.empty(len(keys), dtype=np.int64)
         fresh = []
-        for n, key in enumerate(map(tuple, keys.tolist())):
-            row = self.index.get(key)  # type: ignore[arg-type]
+        for n, (i, j, k) in enumerate(keys.tolist()):
+            key = (i, j, k)
+            row = self.index.get(key)
             if row is None:
                 row = len(self.index)
-                self.index[key] = row  # type: ignore[index]
+                self.index[key] = row
                 fresh.append(n)
             rows[n] = row
         self._grow(len(self.index))

@@ -6,9 +6,9 @@ from typing import Any
 
 import numpy as np
 import pytest
+from recon_views import BASELINE, Views, render_views
 
 from perception_plugins.reconstruction.depth import RangeSettings, incidence_cosines, range_map, scaled_intrinsics
-from recon_views import BASELINE, Views, render_views
 
 FULL = RangeSettings(scale=1, min_range_m=1.5, max_range_m=8.0)
 
