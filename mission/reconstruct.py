@@ -14,7 +14,9 @@ object, and the outputs keep the object with `SEABED_MARGIN_M` of seabed around 
 Outputs in the output folder (default RUN/models/ID/reconstruction): `mesh.ply` and `mesh.glb` (the cleaned mesh
 with grey vertex colours, through trimesh), `points.ply` (the range maps' points, every 4th pixel, in the world
 frame), `report.json` (frames, timings, mesh size, the seabed plane and the object's extent above it) and
-`mesh.png` (a shaded picture of the mesh).
+`mesh.png` (a shaded picture of the mesh), and `object.yaml`: an `objects:` entry for a mission's database
+(`database_entry`: pose, size and characteristic-point sets proposed from the mesh; no `model:`, which the
+language reserves for multi-view model files).
 """
 
 from __future__ import annotations
@@ -117,6 +119,38 @@ def seabed_plane(points: Array, tolerance: float = 0.05, rounds: int = 3) -> Arr
     return np.asarray(plane)
 
 
+def database_entry(object_id: str, vertices: Array, plane: Array) -> dict[str, Any] | None:
+    """An `objects:` entry for the mission language: the object frame has its origin on the seabed plane at the
+    north-west-most corner of the object's footprint box, axes north, east, down (heading 0); `size` is the box;
+    the characteristic-point sets are `propose_point_sets`' (a symmetric set is named so in `description`)."""
+    from perception_plugins.reconstruction.keypoints import propose_point_sets
+
+    height = plane[0] * vertices[:, 0] + plane[1] * vertices[:, 1] + plane[2] - vertices[:, 2]
+    above = vertices[height > OBJECT_HEIGHT_M]
+    if len(above) == 0:
+        return None
+    lo, hi = above[:, :2].min(axis=0), above[:, :2].max(axis=0)
+    depth0 = float(plane[0] * lo[0] + plane[1] * lo[1] + plane[2])
+    origin = np.array([lo[0], lo[1], depth0])
+    proposals = propose_point_sets(vertices[height > -0.05], plane)
+    sets, symmetric = [], []
+    for k, proposal in enumerate(proposals):
+        name = f"corners-{k + 1}"
+        sets.append({"id": name, "points": [[round(float(c), 3) for c in p - origin] for p in proposal.points]})
+        if proposal.symmetric:
+            symmetric.append(name)
+    size = [round(float(v), 2) for v in (*(hi - lo), float(height.max()))]
+    return {
+        "id": object_id,
+        "description": "reconstructed by `auv reconstruct`" + (
+            f"; symmetric sets (the prior heading must choose): {', '.join(symmetric)}" if symmetric else ""),
+        "pose": {"north": round(float(origin[0]), 3), "east": round(float(origin[1]), 3),
+                 "depth": round(depth0, 3), "heading": 0.0},
+        "size": [max(v, 0.01) for v in size],
+        "characteristic_points": sets,
+    }
+
+
 def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
                     voxel_m: float = 0.02) -> dict[str, Any]:
     """Reconstruct the object from the run's recording and write the outputs; returns the report."""
@@ -164,6 +198,11 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     else:
         point_grey = np.concatenate(greys)
     write_mesh(mesh, out)
+    entry = database_entry(object_id, mesh.vertices, plane) if len(above) else None
+    if entry is not None:
+        import yaml
+
+        (out / "object.yaml").write_text(yaml.safe_dump({"objects": [entry]}, sort_keys=False), encoding="utf-8")
     write_points(points, point_grey, out / "points.ply")
     render_picture(mesh, out / "mesh.png", title=f"{object_id}: {len(mesh.faces):,} triangles")
     report: dict[str, Any] = {
@@ -179,11 +218,12 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
                     "fusion_per_frame": float(np.median(result.fusion_s)),
                     "extract_and_clean": result.extract_s, "wall_total": time.perf_counter() - t0},
         "volume_mb": round(result.volume.nbytes / 1e6, 2),
-        "files": ["mesh.ply", "mesh.glb", "points.ply", "mesh.png", "report.json"], "out": str(out),
+        "files": ["mesh.ply", "mesh.glb", "points.ply", "mesh.png", "report.json"]
+        + (["object.yaml"] if entry is not None else []), "out": str(out),
     }
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
     return report
 
 
-__all__ = ["Recording", "ReconstructionError", "find_recording", "read_recording", "reconstruct_run",
+__all__ = ["Recording", "ReconstructionError", "database_entry", "find_recording", "read_recording", "reconstruct_run",
            "seabed_plane"]

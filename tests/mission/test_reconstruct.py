@@ -74,3 +74,24 @@ def test_reconstruct_writes_a_mesh_on_the_true_object_and_its_files(run_dir: Pat
 def test_a_run_without_a_recording_is_refused_with_the_places_looked_at(tmp_path: Path) -> None:
     with pytest.raises(ReconstructionError, match="models/wellhead-x"):
         reconstruct_run(tmp_path, "wellhead-x")
+
+
+def test_the_database_entry_is_accepted_by_the_mission_language(run_dir: Path, tmp_path: Path) -> None:
+    import yaml
+
+    from mission.language.loader import validate_mission_file
+
+    entry = yaml.safe_load((run_dir / "out" / "object.yaml").read_text())["objects"][0]
+    assert entry["id"] == "wellhead-x" and 1 <= len(entry["characteristic_points"]) <= 2
+    assert all(4 <= len(s["points"]) <= 6 for s in entry["characteristic_points"])
+    assert entry["pose"]["depth"] == pytest.approx(SEABED_DEPTH, abs=0.1)
+    assert entry["size"][2] == pytest.approx(3.0, abs=0.25)
+    mission = {"name": "uses-reconstruction", "objects": [entry],
+               "sensors": {"usbl": {"sigma": 1.5}},
+               "route": [{"id": "go", "transit": {"to": {"north": 0, "east": 0}, "depth": 20}}]}
+    path = tmp_path / "m.yaml"
+    path.write_text(yaml.safe_dump(mission, sort_keys=False))
+    loaded, diagnostics = validate_mission_file(path)
+    assert [d for d in diagnostics if not d.warning] == [] and loaded is not None
+    assert loaded.objects[0].characteristic_points[0].points[0] == pytest.approx(
+        entry["characteristic_points"][0]["points"][0])
