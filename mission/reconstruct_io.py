@@ -55,7 +55,7 @@ def render_picture(mesh: Mesh, path: Path, title: str = "", azimuth_deg: float =
                    elevation_deg: float = 35.0, width: int = 960) -> None:
     """A shaded orthographic picture of the mesh seen from `azimuth` (from north, clockwise) and `elevation`.
 
-    Rasterised with numpy (a z-buffer of points spread over every triangle, about two a pixel, nearest kept)
+    Rasterised with numpy (a z-buffer of points spread over every triangle, about three a pixel, nearest kept)
     and saved through matplotlib: drawing hundreds of thousands of polygons with matplotlib takes minutes."""
     require("matplotlib", "the mesh picture (`auv reconstruct`)")
     import matplotlib
@@ -66,7 +66,7 @@ def render_picture(mesh: Mesh, path: Path, title: str = "", azimuth_deg: float =
     a, e = math.radians(azimuth_deg), math.radians(elevation_deg)
     view = np.array([math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), -math.sin(e)])  # towards the viewer
     right = np.array([-math.sin(a), math.cos(a), 0.0])
-    up = np.cross(view, right)
+    up = np.cross(right, view)  # world up on the picture
     v = mesh.vertices - mesh.vertices.mean(axis=0)
     xy = np.column_stack([v @ right, v @ up])
     lo, span = xy.min(axis=0), np.ptp(xy, axis=0) + 1e-9
@@ -82,7 +82,7 @@ def render_picture(mesh: Mesh, path: Path, title: str = "", azimuth_deg: float =
     p0, p1, p2 = px[tri[:, 0]], px[tri[:, 1]], px[tri[:, 2]]
     d1, d2 = p1 - p0, p2 - p0
     area_px = 0.5 * np.abs(d1[:, 0] * d2[:, 1] - d2[:, 0] * d1[:, 1])
-    count = np.minimum(np.ceil(2.0 * area_px).astype(np.int64) + 1, 400)
+    count = np.minimum(np.ceil(3.0 * area_px).astype(np.int64) + 2, 600)
     face = np.repeat(np.arange(len(tri)), count)
     rng = np.random.default_rng(0)
     r1, r2 = np.sqrt(rng.random(len(face))), rng.random(len(face))
