@@ -9,10 +9,14 @@ from typing import Any
 
 
 def _reconstruct(args: argparse.Namespace) -> int:
-    from mission.extras import require
+    from mission.extras import MissingExtraError, has, require
     from mission.reconstruct import reconstruct_run
 
-    require("skimage", "marching cubes (`auv reconstruct`; pip install 'auv-mission[recon]')")
+    for module in ("skimage", "trimesh"):  # marching cubes; PLY and glTF files
+        if not has(module):
+            raise MissingExtraError(f"`auv reconstruct` needs {module}, which is not installed: "
+                                    "pip install 'auv-mission[recon]'")
+    require("matplotlib", "the mesh picture (`auv reconstruct`)")
     report = reconstruct_run(Path(args.run), args.object, Path(args.out) if args.out else None, args.voxel)
     extent = report["object_extent"]
     print(f"{report['object']}: {report['frames']} frame(s) from {report['recording']} ({report['pose_file']}), "

@@ -20,8 +20,7 @@ R_GLTF_NED = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])
 
 
 def _trimesh(mesh: Mesh, R: NDArray[np.float64] | None = None) -> Any:
-    require("trimesh", "writing meshes (`auv reconstruct`)")
-    import trimesh
+    import trimesh  # the `recon` extra; `auv reconstruct` checks it is installed
 
     grey = np.clip(mesh.grey, 0, 255).astype(np.uint8)
     colours = np.column_stack([grey, grey, grey, np.full(len(grey), 255, np.uint8)])
