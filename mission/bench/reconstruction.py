@@ -6,7 +6,8 @@ B 0.25 m, 1 grey level of sensor noise) looks at each from rings of views at `DI
 the surfaces ~3–5 m). Per object:
 
 - ours (`perception_plugins.reconstruction`): range maps, hashed TSDF fusion at the true poses, marching cubes,
-  artefact removal; and the same range maps fused at the poses navigation would give (`noisy_poses`);
+  artefact removal; the same range maps fused at the poses navigation would give (`noisy_poses`); and at those
+  poses refined by point-to-plane ICP against the maps already placed (`register.refine_poses`, timed apart);
 - Open3D's hashed TSDF fed the same range maps and true poses, same voxel and truncation (`_open3d` says why it is
   the `VoxelBlockGrid` and not `ScalableTSDFVolume`; skipped with a message when Open3D is not installed:
   `pip install -e .[bench]`, which needs the system's libusb-1.0-0).
@@ -100,6 +101,7 @@ def measure_shape(name: str, quick: bool) -> dict[str, Any]:
     from mission.language.models import Stereo
     from mission.sim.camera import Degradations, StereoCamera
     from perception_plugins.reconstruction import ReconstructionSettings, fuse_range_maps, fuse_views
+    from perception_plugins.reconstruction.register import refine_poses
 
     cv2.setNumThreads(1)
     world = scene_world(name)
@@ -120,7 +122,12 @@ def measure_shape(name: str, quick: bool) -> dict[str, Any]:
     ours = fuse_views(((f.left, f.right, T) for f, T in zip(frames, poses, strict=True)), frames[0].K, BASELINE,
                       settings, maps, bounds)
     region = (lo - MARGIN, hi + MARGIN)
-    nav = fuse_range_maps(maps, noisy_poses(poses, seed=7), settings, bounds)
+    nav_poses = noisy_poses(poses, seed=7)
+    nav = fuse_range_maps(maps, nav_poses, settings, bounds)
+    t0 = time.process_time()
+    refined_poses = refine_poses(maps, nav_poses)
+    icp_s = (time.process_time() - t0) / len(maps)
+    refined = fuse_range_maps(maps, refined_poses, settings, bounds)
     truth_depth = np.concatenate([f.depth_left[::2, ::2].reshape(-1) for f in frames])
     ranges = truth_depth[np.isfinite(truth_depth)]
     out: dict[str, Any] = {
@@ -130,6 +137,8 @@ def measure_shape(name: str, quick: bool) -> dict[str, Any]:
         "ours": _evaluate(ours.mesh, parts, exposed, region, samples),
         "ours_before_cleaning": _evaluate(ours.raw_mesh, parts, exposed, region, samples),
         "ours_navigation_poses": _evaluate(nav.mesh, parts, exposed, region, samples),
+        "ours_navigation_poses_icp": _evaluate(refined.mesh, parts, exposed, region, samples),
+        "icp_s_per_frame": round(icp_s, 4),
         "depth_s_per_frame": round(statistics.median(ours.depth_s), 4),
         "fusion_s_per_frame": round(statistics.median(ours.fusion_s), 4),
         "extract_and_clean_s": round(ours.extract_s, 3),
