@@ -33,6 +33,7 @@ BENCHMARKS: dict[str, str] = {
     "multiview": "mission.bench.multiview",
     "vo": "mission.bench.vo",
     "photo-survey": "mission.bench.photo_survey",
+    "reconstruction": "mission.bench.reconstruction",
 }
 
 BenchFn = Callable[[bool], tuple[dict[str, Any], dict[str, dict[str, Any]]]]
