@@ -69,8 +69,9 @@ R_BODY_CAM = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
 
 def camera_pose(north: float, east: float, depth: float, heading_deg: float, pitch_deg: float = 0.0,
-                roll_deg: float = 0.0, baseline: float = 0.0) -> Array:
-    """T_world_cam of the down-looking left camera on a vehicle at this pose.
+                roll_deg: float = 0.0, baseline: float = 0.0, R_body_cam: Array = R_BODY_CAM) -> Array:
+    """T_world_cam of the left camera on a vehicle at this pose, mounted as `R_body_cam` says (default: looking
+    down; `mission.language.mount.Mount.R_body_cam` gives a tilted mount's).
 
     >>> T = camera_pose(0.0, 0.0, 10.0, 90.0, baseline=0.5)  # heading east: image x (starboard) points south
     >>> T[:3, 0].round(6).tolist(), T[:3, 2].round(6).tolist(), (T[:3, 3].round(6) + 0.0).tolist()
@@ -78,6 +79,6 @@ def camera_pose(north: float, east: float, depth: float, heading_deg: float, pit
     """
     T_world_body = pose_matrix(north, east, depth, heading_deg, pitch_deg, roll_deg)
     T_body_cam = np.eye(4)
-    T_body_cam[:3, :3] = R_BODY_CAM
+    T_body_cam[:3, :3] = R_body_cam
     T_body_cam[:3, 3] = (0.0, -baseline / 2.0, 0.0)
     return T_world_body @ T_body_cam

@@ -37,6 +37,7 @@ from mission.agents.report import ReferenceReport
 from mission.frames import camera_pose
 from mission.geometry import invert, transform_points
 from mission.language.models import Reference
+from mission.language.mount import R_body_cam_of
 from mission.plugin_api import PointSetModel, ReferencingRequest, ReferencingResult, StereoImages
 from mission.plugin_calls import PluginCall
 from mission.vehicle import Command, NavState, Observation
@@ -98,7 +99,8 @@ class ReferenceAgent(Agent):
     def _submit(self, frame: StereoImages, nav: NavState) -> None:
         """Hand the frame to the plug-in with the prior of the object as estimated now: the database pose while
         searching (metres off), the search's referencing once a set is recognised (centimetres)."""
-        T_world_cam = camera_pose(nav.north, nav.east, nav.depth, nav.heading, baseline=self.baseline)
+        T_world_cam = camera_pose(nav.north, nav.east, nav.depth, nav.heading, baseline=self.baseline,
+                                  R_body_cam=R_body_cam_of(self.context.mission.sensors.stereo))
         T_world_object = self.T_world_object_est if self.T_world_object_est is not None else self.T_world_object_db
         prior = invert(T_world_cam) @ T_world_object
         radius = FINE_PRIOR_RADIUS_M if self.fine is not None else SEARCH_PRIOR_RADIUS_M

@@ -37,12 +37,16 @@ class ReferenceReport(AgentReport):
 
 @dataclass
 class TargetOutcome:
-    """One target of an inspection: the photos asked for and taken, and the viewpoint (object frame)."""
+    """One target of an inspection: the photos asked for and taken, and the viewpoint (object frame): the planned
+    one, which rule planned it (`designed`, `raised`, `oblique`: `mission.agents.inspect.viewpoint`) and the
+    designed one."""
 
     photos_requested: int
     reference: str
     photos: int = 0
     viewpoint_object: list[float] | None = None
+    designed_object: list[float] | None = None
+    viewpoint: str = "designed"
 
     @property
     def done(self) -> bool:
@@ -50,13 +54,15 @@ class TargetOutcome:
 
     def as_json(self) -> dict[str, Any]:
         return {"photos_requested": self.photos_requested, "photos": self.photos,
-                "viewpoint_object": self.viewpoint_object, "reference": self.reference}
+                "viewpoint_object": self.viewpoint_object, "reference": self.reference,
+                "designed_object": self.designed_object, "viewpoint": self.viewpoint}
 
 
 @dataclass
 class Photo:
-    """A photograph as taken: where the agent believed the camera was (`T_object_cam_est`) and the viewpoint it
-    aimed at, both in the object frame."""
+    """A photograph as taken: where the agent believed the camera was (`T_object_cam_est`), the planned viewpoint
+    it aimed at and the designed one (`designed_object`; `viewpoint`: the rule that planned it), all in the
+    object frame."""
 
     target: str
     index: int
@@ -67,12 +73,15 @@ class Photo:
     camera_error_est_m: float
     altitude_limited: bool
     odometry_path_m: float
+    designed_object: list[float] | None = None
+    viewpoint: str = "designed"
 
     def as_json(self) -> dict[str, Any]:
         return {"target": self.target, "index": self.index, "time": self.time, "file": self.file,
                 "viewpoint_object": self.viewpoint_object, "T_object_cam_est": self.T_object_cam_est,
                 "camera_error_est_m": self.camera_error_est_m, "altitude_limited": self.altitude_limited,
-                "odometry_path_m": self.odometry_path_m}
+                "odometry_path_m": self.odometry_path_m, "designed_object": self.designed_object,
+                "viewpoint": self.viewpoint}
 
 
 @dataclass

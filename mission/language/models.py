@@ -16,7 +16,7 @@ from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationInfo, 
 from mission import geodesy
 from mission.language import limits as L
 from mission.language.fault_models import Fault
-from mission.language.streamed import Streamed
+from mission.language.mount import Mounted, Streamed  # Streamed: mbes, scanner; Mounted: stereo
 from mission.language.units import Duration, Percent
 
 
@@ -129,7 +129,7 @@ class Mbes(Streamed):
     range_sigma: Annotated[float, between(0.0, 10.0)] = 0.05
 
 
-class Stereo(Streamed):
+class Stereo(Mounted):
     width: Annotated[int, between(16, L.MAX_IMAGE_SIDE)] = 1200
     height: Annotated[int, between(16, L.MAX_IMAGE_SIDE)] = 900
     fx: Annotated[float, between(1.0, 1.0e5)] = 1000.0

@@ -7,9 +7,11 @@ parts), lit only by a spot lamp the vehicle carries (`castshadow` off: shadows c
 
 Frames. Each camera frame follows OpenCV (x right, y down, z along the optical axis); the left camera is the stereo
 frame, the right camera sits at +baseline along the left camera's x with the same orientation (rectified by
-construction). Mounted on the vehicle (`left_camera_pose`): the optical axis is body z (down), image x is body y
-(starboard), image y is −body x (the top of the image looks forward); the left camera sits at −baseline/2 on body y
-(port), the right at +baseline/2 (starboard), both at the body origin otherwise; the lamp sits between them.
+construction). Mounted on the vehicle (`left_camera_pose`): by default the optical axis is body z (down), image x
+is body y (starboard), image y is −body x (the top of the image looks forward); a tilted mount
+(`sensors.stereo.mount.tilt_deg`, `mission.language.mount`) pitches the optical axis up towards body x about body
+y. The left camera sits at −baseline/2 on body y (port), the right at +baseline/2 (starboard), both at the body
+origin otherwise; the lamp sits between them.
 
 Intrinsics: fx from the `Stereo` settings, fy = fx, principal point at the image centre ((W − 1)/2, (H − 1)/2 in
 OpenCV's pixel-centre convention, which is where a symmetric OpenGL frustum puts it); MuJoCo's vertical field of
@@ -135,10 +137,10 @@ def fovy_deg(settings: Stereo) -> float:
 
 
 def left_camera_pose(north: float, east: float, depth: float, heading: float, pitch: float = 0.0,
-                     roll: float = 0.0, baseline: float = 0.25) -> Array:
-    """T_world_left of the down-looking rig on a vehicle at this pose: `mission.frames.camera_pose`, the one
-    mount definition agents use too (left camera at −baseline/2 on body y)."""
-    return camera_pose(north, east, depth, heading, pitch, roll, baseline)
+                     roll: float = 0.0, baseline: float = 0.25, R_body_cam: Array = R_BODY_CAM) -> Array:
+    """T_world_left of the rig on a vehicle at this pose: `mission.frames.camera_pose`, the one mount definition
+    agents use too (left camera at −baseline/2 on body y; looking down unless `R_body_cam` tilts it)."""
+    return camera_pose(north, east, depth, heading, pitch, roll, baseline, R_body_cam)
 
 
 def _gl_context(width: int, height: int) -> Any:
@@ -248,8 +250,10 @@ class StereoCamera:
 
     def render_at(self, north: float, east: float, depth: float, heading: float, pitch: float = 0.0,
                   roll: float = 0.0) -> StereoFrame:
-        """The pair seen from a vehicle at this pose (camera mounted as `left_camera_pose` says)."""
-        return self.render(left_camera_pose(north, east, depth, heading, pitch, roll, self.baseline))
+        """The pair seen from a vehicle at this pose (camera mounted as `left_camera_pose` and the settings'
+        `mount` say)."""
+        return self.render(left_camera_pose(north, east, depth, heading, pitch, roll, self.baseline,
+                                            self.settings.mount.R_body_cam()))
 
     @overload
     def render(self, pose: Array) -> StereoFrame: ...

@@ -1,5 +1,7 @@
-"""Scoring an `inspect` element against the truth: where the camera really was at each photograph, whether the
-target is really in the picture, and how far visual odometry drifted between referencing fixes."""
+"""Scoring an `inspect` element against the truth: where the camera really was at each photograph (against the
+feasible viewpoint the agent planned, `camera_error_m`, and against the designed one, `designed_error_m`), whether
+the target is really in the picture (its true position projected through the camera as mounted), and how far
+visual odometry drifted between referencing fixes."""
 
 from __future__ import annotations
 
@@ -40,7 +42,9 @@ def _photo_truth(photo: Photo, T_world_cam: np.ndarray, T_world_object: np.ndarr
     v = K[1, 1] * p_cam[1] / p_cam[2] + K[1, 2] if p_cam[2] > 0 else math.nan
     est = np.asarray(photo.T_object_cam_est, dtype=float)
     viewpoint = np.asarray(photo.viewpoint_object, dtype=float)
+    designed = np.asarray(photo.designed_object if photo.designed_object is not None else viewpoint, dtype=float)
     return {"camera_error_m": round(float(np.linalg.norm(T_object_cam[:3, 3] - viewpoint)), 4),
+            "designed_error_m": round(float(np.linalg.norm(T_object_cam[:3, 3] - designed)), 4),
             "pointing_error_deg": round(math.degrees(math.acos(float(np.clip(axis @ direction, -1, 1)))), 3),
             "target_pixel": [round(u, 1), round(v, 1)],
             "target_in_image": bool(0 <= u < stereo.width and 0 <= v < stereo.height),
@@ -71,6 +75,7 @@ def inspect_truth(report: InspectReport, vehicle: SimulatedVehicle, scene: Scene
         shots = [e for p, e in zip(report.photos, out["photos"], strict=True) if p.target == tid
                  and "camera_error_m" in e]
         entry["camera_error_max_m"] = max((e["camera_error_m"] for e in shots), default=None)
+        entry["designed_error_max_m"] = max((e["designed_error_m"] for e in shots), default=None)
         entry["pointing_error_max_deg"] = max((e["pointing_error_deg"] for e in shots), default=None)
         entry["target_in_every_photo"] = bool(shots) and all(e["target_in_image"] for e in shots)
         entry["ok"] = bool(outcome.done and entry["target_in_every_photo"] and entry["camera_error_max_m"] is not None

@@ -13,6 +13,7 @@ from mission.agents.inspect.motion import Mover
 from mission.agents.inspect.odometry import OdometryChain
 from mission.agents.inspect.placement import Placement
 from mission.agents.inspect.settings import InspectSettings
+from mission.agents.inspect.surroundings import Surroundings
 from mission.agents.inspect.targets import TargetVisit
 from mission.agents.report import Photo, TargetOutcome
 from mission.artifacts import Artifacts
@@ -36,9 +37,11 @@ def visit() -> tuple[TargetVisit, list[Photo], list[str], Placement]:
     photos: list[Photo] = []
     mover = Mover(place, [np.asarray([HATCH.at])], 1.5, 1.0, settings)
     chain = OdometryChain(None, place, settings)
+    surroundings = Surroundings.of([np.asarray([HATCH.at])], 1.5 + settings.altitude_margin_m, place.tilt_deg,
+                                   settings.max_range_ratio)
     target_visit = TargetVisit(context, {"hatch": HATCH}, {"hatch": TargetOutcome(2, "module-top")}, photos, place,
-                               chain, mover, stops, settings)  # type: ignore[arg-type]
-    target_visit.begin("hatch")
+                               chain, mover, stops, surroundings, settings)  # type: ignore[arg-type]
+    target_visit.begin("hatch", 0.0)
     return target_visit, photos, done, place
 
 

@@ -29,12 +29,14 @@ from mission.agents.inspect.placement import Placement
 from mission.agents.inspect.referencer import Referencer
 from mission.agents.inspect.settings import InspectSettings
 from mission.agents.inspect.states import StopKind
+from mission.agents.inspect.surroundings import Surroundings
 from mission.agents.inspect.targets import TargetVisit
 from mission.agents.inspect.viewing import SetViewer
 from mission.agents.inspect.visit import SetVisit
 from mission.agents.known_object import database_pose
 from mission.agents.report import InspectReport, TargetOutcome
 from mission.geometry import invert, transform_points
+from mission.language.mount import DOWN_DEG
 from mission.vehicle import Command, NavState, Observation
 
 
@@ -60,7 +62,8 @@ class InspectAgent(Agent):
         sets = {ps.id: np.asarray(ps.points, dtype=float) for ps in obj.characteristic_points}
         wanted = [t.id for t in obj.targets] if p.targets == "all" else list(p.targets)
         targets = {t.id: t for t in obj.targets if t.id in wanted}
-        self.place = Placement(database_pose(obj), stereo.baseline if stereo is not None else 0.0)
+        self.place = Placement(database_pose(obj), stereo.baseline if stereo is not None else 0.0,
+                               stereo.mount.tilt_deg if stereo is not None else DOWN_DEG)
         self._survey_prior(context, obj.id, obj.size)
         nav = context.nav
         start = transform_points(invert(self.place.T_wo), np.array([[nav.north, nav.east, nav.depth]]))[0]
@@ -72,10 +75,12 @@ class InspectAgent(Agent):
         self.details = self.report
         self.chain = OdometryChain(context.plugins, self.place, s, report=self.report.vo)
         speed = min(context.mission.vehicle.cruise_speed, s.work_speed_m_s)
-        self.mover = Mover(self.place, [*sets.values(), *(np.asarray([t.at]) for t in obj.targets)],
-                           context.mission.safety.min_altitude, speed, s)
+        known = [*sets.values(), *(np.asarray([t.at]) for t in obj.targets)]
+        self.mover = Mover(self.place, known, context.mission.safety.min_altitude, speed, s)
+        surroundings = Surroundings.of(known, context.mission.safety.min_altitude + s.altitude_margin_m,
+                                       self.place.tilt_deg, s.max_range_ratio)
         self.target_visit = TargetVisit(context, targets, self.report.targets, self.report.photos, self.place,
-                                        self.chain, self.mover, self, s)
+                                        self.chain, self.mover, self, surroundings, s)
         if context.plugins is None or not context.plugins.has("referencing"):
             self.fail("no referencing plug-in is loaded")
             return
@@ -140,7 +145,7 @@ class InspectAgent(Agent):
             self.set_visit.begin(ident, ("set", ident) in self.itinerary.done)
         else:
             self.stop_kind = StopKind.TARGET
-            self.target_visit.begin(ident)
+            self.target_visit.begin(ident, nav.time)
 
     # what the set visit tells (`visit.SetStops`)
     def failed_sets(self) -> Collection[str]:

@@ -10,6 +10,7 @@ import numpy as np
 
 from mission.frames import camera_pose
 from mission.geometry import invert
+from mission.language.mount import DOWN_DEG, mount_rotation
 from mission.vehicle import NavState
 
 
@@ -19,10 +20,12 @@ class Placement:
 
     `T_wo` is the working estimate (a search hit may move it before it is confirmed); `trusted` is the database
     pose or the last fused fix, what an unconfirmed hit falls back to; `fixed` once views have been fused;
-    `path_since_fix` is the odometry path since that fix, which the fix gate allows for."""
+    `path_since_fix` is the odometry path since that fix, which the fix gate allows for; `tilt_deg` is the
+    camera's mount (`sensors.stereo.mount`, `mission.language.mount`)."""
 
     T_wo: np.ndarray
     baseline: float = 0.0
+    tilt_deg: float = DOWN_DEG
     trusted: np.ndarray = field(init=False)
     fixed: bool = False
     path_since_fix: float = 0.0
@@ -48,7 +51,8 @@ class Placement:
 
     def camera_in_world(self, nav: NavState) -> np.ndarray:
         """T_world_cam of the left camera at the estimated pose `nav`."""
-        return camera_pose(nav.north, nav.east, nav.depth, nav.heading, baseline=self.baseline)
+        return camera_pose(nav.north, nav.east, nav.depth, nav.heading, baseline=self.baseline,
+                           R_body_cam=mount_rotation(self.tilt_deg))
 
     def camera_in_object(self, nav: NavState) -> np.ndarray:
         """T_object_cam at the estimated pose `nav`, in the object as placed now."""

@@ -44,6 +44,12 @@ class InspectSettings:
     vo_lost_frames: int = 4  # consecutive lost frames that end an odometry chain
     vo_max_step_m: float = 0.5  # a jump larger than this between frames is not motion but a failure
     # photographs
+    max_range_ratio: float = 1.25  # a viewpoint raised over something too high keeps the target at most this much
+    # farther than its standoff (the target still fits the image, its detail ≥ 80 % of the design's); else oblique
+    altimeter_samples: int = 5  # altimeter readings while settling at a viewpoint that make its ground known
+    altimeter_margin_m: float = 0.05  # measured ground is raised by three times the readings' spread, at least this
+    viewpoint_replan_m: float = 0.02  # a viewpoint planned again moves the vehicle when it moves more than this
+    viewpoint_replans: int = 2  # at most this many re-plans of one target's viewpoint
     viewpoint_tolerance_m: float = 0.03
     viewpoint_depth_tolerance_m: float = 0.05  # the depth sensor's noise is 2 cm
     photo_interval_s: float = 1.0

@@ -1,7 +1,11 @@
-"""Target photography (seed 002 §3.4): from each target's viewpoint — `standoff` metres above it, the camera
-looking down at it, the image's long side along the object — the requested photos, each saved with the camera's
-estimated pose in the object frame. The vehicle reaches the viewpoint by odometry; when the chain breaks, the
-target goes back in the queue behind a re-referencing."""
+"""Target photography (seed 002 §3.4): from each target's viewpoint the requested photos, each saved with the
+camera's estimated pose in the object frame. The designed viewpoint is `standoff` metres from the target along the
+optical axis — above it, looking down, with the default mount — the image's long side along the object; when it
+breaks the altitude floor over what the agent knows lies there (`surroundings`), the nearest feasible one is
+planned (raised, or oblique with a tilted camera: `viewpoint`). While it settles at a viewpoint the vehicle
+samples its altimeter; ground higher than known there becomes a known point, and the viewpoint is planned again.
+The vehicle reaches the viewpoint by odometry; when the chain breaks, the target goes back in the queue behind a
+re-referencing."""
 
 from __future__ import annotations
 
@@ -18,6 +22,7 @@ from mission.agents.inspect.odometry import OdometryChain
 from mission.agents.inspect.placement import Placement
 from mission.agents.inspect.settings import InspectSettings
 from mission.agents.inspect.states import Phase
+from mission.agents.inspect.surroundings import PlannedView, Surroundings
 from mission.agents.inspect.viewing import SetViewer
 from mission.agents.report import Photo, TargetOutcome
 from mission.geometry import transform_points
@@ -39,30 +44,78 @@ class TargetVisit:
 
     def __init__(self, context: AgentContext, targets: Mapping[str, Target], outcomes: Mapping[str, TargetOutcome],
                  photos: list[Photo], place: Placement, chain: OdometryChain, mover: Mover, stops: TargetStops,
-                 settings: InspectSettings):
+                 surroundings: Surroundings, settings: InspectSettings):
         self.context, self.targets, self.outcomes, self.photos = context, targets, outcomes, photos
         self.place, self.chain, self.mover, self.stops, self.settings = place, chain, mover, stops, settings
+        self.surroundings = surroundings
         self.target_id = ""
         self.viewpoint = np.zeros(3)
+        self.designed = np.zeros(3)  # the designed viewpoint (object frame), for reference
+        self.kind = "designed"
         self.heading = 0.0
+        self.replans = 0
+        self.ground: list[tuple[float, float, float]] = []  # altimeter grounds while settling (north, east, depth)
         self.phase = Phase.GO
         self.hold_since = math.nan
         self.last_photo = -math.inf
         self.altitude_limited = False
 
-    def begin(self, tid: str) -> None:
+    def begin(self, tid: str, now: float) -> None:
         target = self.targets[tid]
         up = self.place.T_wo[:3, :3].T @ np.array([0.0, 0.0, -1.0])  # the world's up, in the object frame
         self.target_id = tid
-        self.viewpoint = np.asarray(target.at, dtype=float) + target.standoff * up
-        self.outcomes[tid].viewpoint_object = [round(float(x), 4) for x in self.viewpoint]
-        self.heading = (self.place.heading() - 90.0) % 360.0
+        self.designed = np.asarray(target.at, dtype=float) + target.standoff * up
+        self.replans = 0
+        self._plan(now, "planned")
         self.phase = Phase.GO
         self.last_photo = -math.inf
         # Whether the altimeter forbade the viewpoint's depth on the way (something under it stands higher than
         # the database says: a tarpaulin over a valve panel); the photos then come from the lowest safe depth,
         # and say so.
         self.altitude_limited = False
+
+    def _plan(self, now: float, event: str) -> bool:
+        """Plan the target's viewpoint from what is known now; True when it moved (and says so)."""
+        target = self.targets[self.target_id]
+        designed_heading = (self.place.heading() - 90.0) % 360.0
+        view: PlannedView = self.surroundings.plan(target, self.place.T_wo, designed_heading)
+        previous = self.viewpoint if event == "replanned" else self.designed
+        if view.plan.kind == "designed":  # exactly the design (no round trip through the world frame)
+            camera, heading = self.designed, designed_heading
+        else:
+            camera, heading = view.camera_object, view.heading_deg
+        moved = bool(np.linalg.norm(camera - previous) > self.settings.viewpoint_replan_m) or event == "planned"
+        if not moved:
+            return False
+        self.viewpoint, self.heading, self.kind = camera, heading, view.plan.kind
+        outcome = self.outcomes[self.target_id]
+        outcome.viewpoint_object = [round(float(x), 4) for x in self.viewpoint]
+        outcome.designed_object = [round(float(x), 4) for x in self.designed]
+        outcome.viewpoint = self.kind
+        if self.kind != "designed":
+            self.context.emit(f"viewpoint_{event}", now, element=self.context.element.id, target=self.target_id,
+                              kind=self.kind, viewpoint_object=outcome.viewpoint_object,
+                              designed_object=outcome.designed_object, heading_deg=round(heading, 2),
+                              range_m=round(view.plan.range_m, 3), clearance_m=round(view.plan.clearance_m, 3),
+                              feasible=view.plan.feasible)
+        return True
+
+    def _check_ground(self, nav: NavState) -> bool:
+        """After settling: when the ground the altimeter saw is, on its median, too high for the viewpoint (the
+        floor binds), keep it as known ground and plan again; True when the viewpoint moved (the vehicle goes
+        there and settles again)."""
+        s = self.settings
+        samples, self.ground = np.asarray(self.ground, dtype=float), []
+        if len(samples) < s.altimeter_samples or self.replans >= s.viewpoint_replans:
+            return False
+        viewpoint_depth = float(transform_points(self.place.T_wo, self.viewpoint[None, :])[0, 2])
+        if float(np.median(samples[:, 2])) - viewpoint_depth >= self.surroundings.floor_m:
+            return False
+        self.surroundings.measure(self.place.T_wo, samples, s.altimeter_margin_m)
+        if not self._plan(nav.time, "replanned"):
+            return False
+        self.replans += 1
+        return True
 
     def goal(self) -> Goal:
         camera = transform_points(self.place.T_wo, self.viewpoint[None, :])[0]
@@ -88,9 +141,11 @@ class TargetVisit:
             self.phase, self.hold_since = Phase.SETTLE, nav.time
         elif self.phase is Phase.SETTLE:
             if not there:
-                self.phase = Phase.GO
+                self.phase, self.ground = Phase.GO, []
             elif nav.time - self.hold_since >= s.settle_s:
-                self.phase = Phase.PHOTO
+                self.phase = Phase.GO if self._check_ground(nav) else Phase.PHOTO
+            elif nav.altitude is not None:
+                self.ground.append((nav.north, nav.east, nav.depth + nav.altitude))
         elif self.phase is Phase.PHOTO and frame is not None and there and \
                 nav.time - self.last_photo >= s.photo_interval_s - 1e-6:
             self._photo(frame, nav)
@@ -107,11 +162,12 @@ class TargetVisit:
         assert outcome.viewpoint_object is not None
         photo = Photo(tid, k, frame.time, name, outcome.viewpoint_object, T_object_cam.round(6).tolist(),
                       round(float(np.linalg.norm(T_object_cam[:3, 3] - self.viewpoint)), 4), self.altitude_limited,
-                      round(self.chain.path_m, 3))
+                      round(self.chain.path_m, 3), [round(float(x), 4) for x in self.designed], self.kind)
         self.photos.append(photo)
         self.context.artifacts.append_record(f"photos/{element}/index.jsonl", photo.as_json())
         self.context.emit("photo", nav.time, element=element, target=tid, index=k, file=name,
-                          camera_error_est_m=photo.camera_error_est_m, altitude_limited=photo.altitude_limited)
+                          camera_error_est_m=photo.camera_error_est_m, altitude_limited=photo.altitude_limited,
+                          **({} if self.kind == "designed" else {"viewpoint": self.kind}))
         outcome.photos = k + 1
         self.last_photo = nav.time
         if outcome.done:

@@ -1,6 +1,7 @@
 """Where the inspect agent views a point set from (seed 002 §3.3, seed 000's experiments): the altitudes at which
-a set is wholly in view and inside the stereo range, the hover poses over it (image x along the object), the
-fine views' heights and shifts, and how closely views taken there must agree."""
+a set is wholly in view and inside the stereo range, the hover poses over it (image x along the object; a tilted
+camera looks at the same point from the same range, from behind it), the fine views' heights and shifts, and how
+closely views taken there must agree."""
 
 from __future__ import annotations
 
@@ -12,8 +13,10 @@ from mission.agents.hover import Goal
 from mission.agents.inspect.placement import Placement
 from mission.agents.inspect.search import pattern_offsets, search_order
 from mission.agents.inspect.settings import InspectSettings
+from mission.agents.inspect.viewpoint import optical_axis
 from mission.frames import camera_pose
 from mission.geometry import transform_points
+from mission.language.mount import DOWN_DEG
 
 
 def fit_altitude(points: np.ndarray, field: tuple[float, float], fill: float = 0.75) -> float:
@@ -87,7 +90,10 @@ class SetViewer:
         camera = np.array([centre[0] + shift[0], centre[1] + shift[1], float(pts[:, 2].min()) - altitude])
         extent = np.ptp(self.sets[set_id][:, :2], axis=0)
         along_x = extent[0] >= extent[1] or not along_set
-        return self.camera_goal(place, camera, (place.heading() - (90.0 if along_x else 0.0)) % 360.0)
+        heading = (place.heading() - (90.0 if along_x else 0.0)) % 360.0
+        if place.tilt_deg != DOWN_DEG:  # a tilted camera looks at the same point from the same range
+            camera = camera + altitude * (np.array([0.0, 0.0, 1.0]) - optical_axis(heading, place.tilt_deg))
+        return self.camera_goal(place, camera, heading)
 
     def fine_goal(self, place: Placement, set_id: str, k: int) -> Goal:
         """The `k`-th fine view over a set: its height cycles through the fine steps, and it moves the fine shift
