@@ -39,6 +39,7 @@ def main() -> None:
     ap.add_argument("--views", type=int, default=6)
     ap.add_argument("--along-set", action="store_true")
     ap.add_argument("--altitude", type=float, default=None)
+    ap.add_argument("--plain", action="store_true", help="the plug-in without its guided corners")
     ap.add_argument("--out", default="")
     args = ap.parse_args()
     cv2.setNumThreads(1)
@@ -52,7 +53,7 @@ def main() -> None:
     settings = InspectSettings()
     viewer = SetViewer(sets, (1.2, 0.9), 8.0, settings)
     plugin = StereoReferencingPlugin()
-    plugin.configure({"sensors": {"stereo": {"max_range": 8.0}}})
+    plugin.configure({"sensors": {"stereo": {"max_range": 8.0}}, "referencing": {"guided": not args.plain}})
     rng = np.random.default_rng(7)
     report: dict[str, Any] = {}
     for set_id, pts in sets.items():
@@ -123,8 +124,9 @@ def main() -> None:
         for r in rows:
             print(f"  view {r['view']} cloud {r['cloud_points']} rec {r['recognised']} m={r['matched']} "
                   f"err={r['max_error_m']} {r['reason'] or ''}")
-            for i, p in enumerate(r["points"]):
-                print(f"     P{i} {p}")
+            if os.environ.get("SET_DIAGNOSIS_POINTS"):
+                for i, p in enumerate(r["points"]):
+                    print(f"     P{i} {p}")
     sys.stdout.flush()
 
 

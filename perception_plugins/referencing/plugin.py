@@ -31,6 +31,7 @@ import numpy as np
 
 from mission.geometry import rotation_angle_deg, transform_points
 from mission.plugin_api import ReferencingRequest, ReferencingResult, StereoImages
+from perception_plugins.referencing.guided import guided_corners
 from perception_plugins.referencing.identification import reference
 from perception_plugins.stereo.camera import RectifiedStereo
 from perception_plugins.stereo.pipeline import stereo_cloud
@@ -48,6 +49,8 @@ class StereoReferencingPlugin:
         self.gate_deg = 25.0
         self.gate_tilt_deg = 6.0
         self.gate_depth_m = 1.0
+        self.guided = True
+        self.guided_radius_m = 1.0
 
     def configure(self, settings: Mapping[str, Any]) -> None:
         stereo = (settings.get("sensors") or {}).get("stereo") or {}
@@ -58,12 +61,27 @@ class StereoReferencingPlugin:
         self.gate_deg = float(own.get("gate_deg", self.gate_deg))
         self.gate_tilt_deg = float(own.get("gate_tilt_deg", self.gate_tilt_deg))
         self.gate_depth_m = float(own.get("gate_depth_m", self.gate_depth_m))
+        self.guided = bool(own.get("guided", self.guided))
+        self.guided_radius_m = float(own.get("guided_radius_m", self.guided_radius_m))
 
     def reset(self) -> None:
         return None
 
     def close(self) -> None:
         return None
+
+    @staticmethod
+    def _with_guided(frame: StereoImages, candidates: np.ndarray, predicted: np.ndarray, radius: float
+                     ) -> np.ndarray:
+        """The candidates plus the guided corners near the predicted points (`guided`); a cloud point within
+        3 cm of a guided corner is the same corner and is dropped."""
+        guided = guided_corners(frame.left, frame.right, frame.K, frame.baseline, predicted, radius).points_cam
+        if not len(guided):
+            return candidates
+        if len(candidates):
+            gap = np.min(np.linalg.norm(candidates[:, None, :] - guided[None, :, :], axis=2), axis=1)
+            candidates = candidates[gap > 0.03]
+        return np.vstack([candidates, guided])
 
     def process(self, frame: StereoImages, request: ReferencingRequest) -> ReferencingResult:
         height, width = frame.left.shape[:2]
@@ -86,6 +104,8 @@ class StereoReferencingPlugin:
             if prior is not None and request.prior_radius is not None:
                 near = np.min(np.linalg.norm(points[:, None, :] - predicted[None, :, :], axis=2), axis=1)
                 candidates = points[near <= request.prior_radius]
+                if self.guided and request.prior_radius <= self.guided_radius_m:
+                    candidates = self._with_guided(frame, candidates, predicted, request.prior_radius)
             if len(candidates) < 3:
                 continue
             found = reference(model.points, candidates, tolerance, prior)
