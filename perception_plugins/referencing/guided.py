@@ -28,7 +28,7 @@ Array = NDArray[np.float64]
 HALF = 6  # quadrant window side - 1 (a quadrant is (HALF+1)² pixels), and the centred window's half side
 MIN_NCC = 0.8  # a window whose correlation peak is below this does not measure the disparity
 CLOSE_NCC = 0.05  # windows within this of the best peak are equally good; the largest disparity among them wins
-CORNERS_PER_POINT = 3  # Harris maxima kept per predicted point's window
+CORNERS_PER_POINT = 8  # Harris maxima kept per predicted point's window
 
 
 @dataclass(frozen=True)
@@ -88,6 +88,28 @@ def foreground_disparity(left: NDArray[np.uint8], right: NDArray[np.uint8], u: i
     return max((d, c) for d, c in found if c >= best - CLOSE_NCC)
 
 
+def _window_corners(crop: NDArray[np.float32], centre: tuple[float, float], sigma_px: float) -> Array:
+    """Up to `CORNERS_PER_POINT` Harris maxima of a window, ranked by response times the prior's Gaussian
+    (σ = `sigma_px` around `centre`), refined to sub-pixel: a strong corner far from the prediction (sand along a
+    skid's edge) ranks below a fainter one where the point is expected."""
+    response = cv2.cornerHarris(crop, 5, 3, 0.04)
+    peak = cv2.dilate(response, np.ones((2 * HALF + 1, 2 * HALF + 1), np.uint8))
+    top = float(response.max())
+    if top <= 0:
+        return np.zeros((0, 2))
+    ys, xs = np.nonzero((response >= peak) & (response >= 0.002 * top))
+    inner = (xs >= HALF) & (xs < crop.shape[1] - HALF) & (ys >= HALF) & (ys < crop.shape[0] - HALF)
+    ys, xs = ys[inner], xs[inner]
+    if not len(xs):
+        return np.zeros((0, 2))
+    weight = response[ys, xs] * np.exp(-((xs - centre[0]) ** 2 + (ys - centre[1]) ** 2) / (2.0 * sigma_px ** 2))
+    best = np.argsort(-weight)[:CORNERS_PER_POINT]
+    corners = np.column_stack([xs[best], ys[best]]).astype(np.float32).reshape(-1, 1, 2)
+    corners = cv2.cornerSubPix(crop, corners, (3, 3), (-1, -1),
+                               (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.01))
+    return np.asarray(corners.reshape(-1, 2), dtype=float)
+
+
 def guided_corners(left: NDArray[np.uint8], right: NDArray[np.uint8], K: Array, baseline: float,
                    predicted_cam: Array, radius_m: float, depth_slack_m: float | None = None) -> GuidedCorners:
     """Corners near each predicted point (left camera frame, OpenCV axes) of a rectified pair: the strongest
@@ -112,12 +134,9 @@ def guided_corners(left: NDArray[np.uint8], right: NDArray[np.uint8], K: Array, 
         if x1 - x0 < 4 * HALF or y1 - y0 < 4 * HALF:
             continue
         crop = np.ascontiguousarray(grey[y0:y1, x0:x1])
-        corners = cv2.goodFeaturesToTrack(crop, CORNERS_PER_POINT, 0.05, 2 * HALF, blockSize=5,
-                                          useHarrisDetector=True, k=0.04)
-        if corners is None:
+        corners = _window_corners(crop, (u - x0, v - y0), 0.5 * fx * radius_m / z)
+        if not len(corners):
             continue
-        corners = cv2.cornerSubPix(crop, corners.astype(np.float32), (3, 3), (-1, -1),
-                                   (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.01))
         d_lo, d_hi = fb / (z + slack), fb / max(z - slack, 0.3)
         for cu, cv_ in corners.reshape(-1, 2):
             uu, vv = int(round(x0 + cu)), int(round(y0 + cv_))
