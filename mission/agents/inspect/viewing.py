@@ -67,7 +67,7 @@ class SetViewer:
         like the stereo depth error (σ_Z ∝ Z²), as the plug-in's own tolerance does."""
         s = self.settings
         pts = self.sets[set_id]
-        reach = self.fine_altitude(set_id) + s.fine_steps_m[len(s.fine_steps_m) // 2] + float(np.ptp(pts[:, 2]))
+        reach = self.fit_altitude(set_id) + s.fine_steps_m[len(s.fine_steps_m) // 2] + float(np.ptp(pts[:, 2]))
         return s.view_agreement_m * max(1.0, (reach / s.fine_altitude_m) ** 2)
 
     @staticmethod
@@ -90,14 +90,17 @@ class SetViewer:
         return self.camera_goal(place, camera, (place.heading() - (90.0 if along_x else 0.0)) % 360.0)
 
     def fine_goal(self, place: Placement, set_id: str, k: int) -> Goal:
-        """The `k`-th fine view over a set: its height cycles through the fine steps, and it moves the fine shift
-        back and forth along the object's x-axis (fresh image noise and corners each time)."""
+        """The `k`-th fine view over a set: from where the whole set is in view (`fit_altitude`, the image's long
+        side along the set's longer axis: a skid set spans the skid's 5 m width, and seen at 3.6 m with the image
+        across it, two of its five points were out of every fine view), its height cycling through the fine steps,
+        moving the fine shift back and forth along the object's x-axis (fresh image noise and corners each time)."""
         s = self.settings
         shift = s.fine_shift_m * (1 if k % 2 else -1) if k else 0.0
         x_axis = place.T_wo[:3, 0]
-        altitude = min(self.fine_altitude(set_id) + s.fine_steps_m[k % len(s.fine_steps_m)],
+        altitude = min(self.fit_altitude(set_id) + s.fine_steps_m[k % len(s.fine_steps_m)],
                        self.range_ceiling(set_id))
-        return self.over_set(place, set_id, altitude, (shift * float(x_axis[0]), shift * float(x_axis[1])))
+        return self.over_set(place, set_id, altitude, (shift * float(x_axis[0]), shift * float(x_axis[1])),
+                             along_set=True)
 
     def search_goals(self, place: Placement, pattern: str) -> list[Goal]:
         """The whole pattern around the most distinctive set first, then around the next, every other position a
