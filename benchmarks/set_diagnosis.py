@@ -50,7 +50,7 @@ def main() -> None:
     manifold = next(o for o in camera.world.scene.objects if o.id == "manifold-1")
     obj = next(o for o in mission.objects if o.id == "manifold-1")
     sets = {s.id: np.asarray(s.points, dtype=float) for s in obj.characteristic_points}
-    settings = InspectSettings()
+    settings = InspectSettings(**({"view_fill": float(os.environ["FILL"])} if os.environ.get("FILL") else {}))
     viewer = SetViewer(sets, (1.2, 0.9), 8.0, settings)
     plugin = StereoReferencingPlugin()
     plugin.configure({"sensors": {"stereo": {"max_range": 8.0}}, "referencing": {"guided": not args.plain}})

@@ -28,7 +28,7 @@ Array = NDArray[np.float64]
 HALF = 6  # quadrant window side - 1 (a quadrant is (HALF+1)² pixels), and the centred window's half side
 MIN_NCC = 0.8  # a window whose correlation peak is below this does not measure the disparity
 CLOSE_NCC = 0.05  # windows within this of the best peak are equally good; the largest disparity among them wins
-CORNERS_PER_POINT = 8  # Harris maxima kept per predicted point's window
+CORNERS_PER_POINT = 6  # Harris maxima kept per predicted point's window
 
 
 @dataclass(frozen=True)

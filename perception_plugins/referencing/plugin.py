@@ -73,14 +73,15 @@ class StereoReferencingPlugin:
     @staticmethod
     def _with_guided(frame: StereoImages, candidates: np.ndarray, predicted: np.ndarray, radius: float
                      ) -> np.ndarray:
-        """The candidates plus the guided corners near the predicted points (`guided`); a cloud point within
-        3 cm of a guided corner is the same corner and is dropped."""
+        """The candidates plus the guided corners near the predicted points (`guided`); a guided corner within
+        3 cm of a candidate is the same corner, and the candidate (matched and refined over the whole image) is
+        kept."""
         guided = guided_corners(frame.left, frame.right, frame.K, frame.baseline, predicted, radius).points_cam
         if not len(guided):
             return candidates
         if len(candidates):
-            gap = np.min(np.linalg.norm(candidates[:, None, :] - guided[None, :, :], axis=2), axis=1)
-            candidates = candidates[gap > 0.03]
+            gap = np.min(np.linalg.norm(guided[:, None, :] - candidates[None, :, :], axis=2), axis=1)
+            guided = guided[gap > 0.03]
         return np.vstack([candidates, guided])
 
     def process(self, frame: StereoImages, request: ReferencingRequest) -> ReferencingResult:
