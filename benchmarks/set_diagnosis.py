@@ -107,7 +107,7 @@ def main() -> None:
             err = None
             if res.recognised and res.T_cam_object is not None:
                 err = float(np.max(np.linalg.norm(transform_points(res.T_cam_object, pts) - p_cam, axis=1)))
-            rows.append({"view": k, "altitude": round(float(-goal.depth + pts[:, 2].min() + manifold.T_world_object[2, 3]), 2),
+            rows.append({"view": k, "range_to_top_m": round(float(p_cam[:, 2].min()), 2),
                          "cloud_points": len(cloud), "all_unoccluded": bool(seen.all()),
                          "recognised": bool(res.recognised), "matched": res.matched, "ambiguous": res.ambiguous,
                          "max_error_m": None if err is None else round(err, 3),

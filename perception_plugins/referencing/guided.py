@@ -104,10 +104,10 @@ def _window_corners(crop: NDArray[np.float32], centre: tuple[float, float], sigm
         return np.zeros((0, 2))
     weight = response[ys, xs] * np.exp(-((xs - centre[0]) ** 2 + (ys - centre[1]) ** 2) / (2.0 * sigma_px ** 2))
     best = np.argsort(-weight)[:CORNERS_PER_POINT]
-    corners = np.column_stack([xs[best], ys[best]]).astype(np.float32).reshape(-1, 1, 2)
-    corners = cv2.cornerSubPix(crop, corners, (3, 3), (-1, -1),
+    seeds = np.column_stack([xs[best], ys[best]]).astype(np.float32).reshape(-1, 1, 2)
+    refined = cv2.cornerSubPix(crop, seeds, (3, 3), (-1, -1),
                                (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.01))
-    return np.asarray(corners.reshape(-1, 2), dtype=float)
+    return np.asarray(refined, dtype=float).reshape(-1, 2)
 
 
 def guided_corners(left: NDArray[np.uint8], right: NDArray[np.uint8], K: Array, baseline: float,
@@ -123,7 +123,7 @@ def guided_corners(left: NDArray[np.uint8], right: NDArray[np.uint8], K: Array, 
     uvs: list[tuple[float, float]] = []
     scores: list[float] = []
     seen: set[tuple[int, int]] = set()
-    grey = np.float32(left)
+    grey = np.asarray(left, dtype=np.float32)
     for p in np.asarray(predicted_cam, dtype=float):
         z = float(p[2])
         if z <= 0.3:

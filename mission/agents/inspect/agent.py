@@ -31,11 +31,11 @@ from mission.agents.inspect.settings import InspectSettings
 from mission.agents.inspect.states import StopKind
 from mission.agents.inspect.targets import TargetVisit
 from mission.agents.inspect.viewing import SetViewer
-from mission.language.detectability import rate_object
 from mission.agents.inspect.visit import SetVisit
 from mission.agents.known_object import database_pose
 from mission.agents.report import InspectReport, TargetOutcome
 from mission.geometry import invert, transform_points
+from mission.language.detectability import rate_object
 from mission.vehicle import Command, NavState, Observation
 
 
