@@ -28,7 +28,8 @@ Array = NDArray[np.float64]
 HALF = 6  # quadrant window side - 1 (a quadrant is (HALF+1)² pixels), and the centred window's half side
 MIN_NCC = 0.8  # a window whose correlation peak is below this does not measure the disparity
 CLOSE_NCC = 0.05  # windows within this of the best peak are equally good; the largest disparity among them wins
-CORNERS_PER_POINT = 6  # Harris maxima kept per predicted point's window
+PRIOR_SIGMA = 0.3  # the prior's Gaussian that ranks a window's corners, as a share of the prior radius
+CORNERS_PER_POINT = 10  # Harris maxima kept per predicted point's window
 
 
 @dataclass(frozen=True)
@@ -134,7 +135,7 @@ def guided_corners(left: NDArray[np.uint8], right: NDArray[np.uint8], K: Array, 
         if x1 - x0 < 4 * HALF or y1 - y0 < 4 * HALF:
             continue
         crop = np.ascontiguousarray(grey[y0:y1, x0:x1])
-        corners = _window_corners(crop, (u - x0, v - y0), 0.5 * fx * radius_m / z)
+        corners = _window_corners(crop, (u - x0, v - y0), PRIOR_SIGMA * fx * radius_m / z)
         if not len(corners):
             continue
         d_lo, d_hi = fb / (z + slack), fb / max(z - slack, 0.3)
