@@ -7,8 +7,9 @@ fouling), below the global detector's quality level or beyond its feature budget
 a top corner over lower ground, so three quarters of a window centred on it see the background: the descriptor
 match fails or takes the background's disparity (module-top's lifting-point corner came out 0.6 m deep).
 
-Here each predicted point gets its own search window (the prior's radius in pixels), where the strongest Harris
-maxima *of that window* are taken, so texture elsewhere in the image takes nothing from it. Each corner's
+Here each predicted point gets its own search window (the prior's radius in pixels), whose own Harris maxima are
+ranked by response times the prior's Gaussian, so texture elsewhere in the image takes nothing from it and a
+strong corner at the window's edge ranks below a fainter one where the point is expected. Each corner's
 disparity is found along its row within the range the prior allows, by normalised correlation of five windows:
 centred and the four quadrants that have the corner at one of their corners (Fusiello's multiple windows). The
 quadrant on the part's top sees only the part; of the windows that correlate well the one with the largest
@@ -113,8 +114,8 @@ def _window_corners(crop: NDArray[np.float32], centre: tuple[float, float], sigm
 
 def guided_corners(left: NDArray[np.uint8], right: NDArray[np.uint8], K: Array, baseline: float,
                    predicted_cam: Array, radius_m: float, depth_slack_m: float | None = None) -> GuidedCorners:
-    """Corners near each predicted point (left camera frame, OpenCV axes) of a rectified pair: the strongest
-    Harris maxima within the prior's `radius_m` of its projection, triangulated with the foreground disparity
+    """Corners near each predicted point (left camera frame, OpenCV axes) of a rectified pair: the best-ranked
+    Harris maxima (`_window_corners`) within the prior's `radius_m` of its projection, triangulated with the foreground disparity
     within ± `depth_slack_m` (default `radius_m`) of its predicted depth."""
     fx, cx, cy = float(K[0, 0]), float(K[0, 2]), float(K[1, 2])
     fb = fx * baseline
