@@ -29,8 +29,8 @@ Array = NDArray[np.float64]
 HALF = 6  # quadrant window side - 1 (a quadrant is (HALF+1)² pixels), and the centred window's half side
 MIN_NCC = 0.8  # a window whose correlation peak is below this does not measure the disparity
 CLOSE_NCC = 0.05  # windows within this of the best peak are equally good; the largest disparity among them wins
-PRIOR_SIGMA = 0.3  # the prior's Gaussian that ranks a window's corners, as a share of the prior radius
-CORNERS_PER_POINT = 10  # Harris maxima kept per predicted point's window
+PRIOR_SIGMA = 0.5  # the prior's Gaussian that ranks a window's corners, as a share of the prior radius
+CORNERS_PER_POINT = 6  # Harris maxima kept per predicted point's window
 
 
 @dataclass(frozen=True)
@@ -115,8 +115,8 @@ def _window_corners(crop: NDArray[np.float32], centre: tuple[float, float], sigm
 def guided_corners(left: NDArray[np.uint8], right: NDArray[np.uint8], K: Array, baseline: float,
                    predicted_cam: Array, radius_m: float, depth_slack_m: float | None = None) -> GuidedCorners:
     """Corners near each predicted point (left camera frame, OpenCV axes) of a rectified pair: the best-ranked
-    Harris maxima (`_window_corners`) within the prior's `radius_m` of its projection, triangulated with the foreground disparity
-    within ± `depth_slack_m` (default `radius_m`) of its predicted depth."""
+    Harris maxima (`_window_corners`) within the prior's `radius_m` of its projection, triangulated with the
+    foreground disparity within ± `depth_slack_m` (default `radius_m`) of its predicted depth."""
     fx, cx, cy = float(K[0, 0]), float(K[0, 2]), float(K[1, 2])
     fb = fx * baseline
     slack = radius_m if depth_slack_m is None else depth_slack_m

@@ -102,16 +102,20 @@ class StereoReferencingPlugin:
                 ranges = predicted[:, 2]
                 tolerance *= max(1.0, (float(np.max(ranges)) / REFERENCE_RANGE_M) ** 2)
             candidates = points
+            radius = request.prior_radius
+            guided = False
             if prior is not None and request.prior_radius is not None:
                 near = np.min(np.linalg.norm(points[:, None, :] - predicted[None, :, :], axis=2), axis=1)
                 candidates = points[near <= request.prior_radius]
-                if self.guided and request.prior_radius <= self.guided_radius_m:
-                    candidates = self._with_guided(frame, candidates, predicted, request.prior_radius)
-            if len(candidates) < 3:
-                continue
-            found = reference(model.points, candidates, tolerance, prior)
+                guided = self.guided and radius is not None and radius <= self.guided_radius_m
+            found = reference(model.points, candidates, tolerance, prior) if len(candidates) >= 3 else None
+            if guided and radius is not None and (found is None or not found.recognised):
+                # Guided corners only when the whole-image cloud does not hold the set: where it does, its
+                # points are the more precise (measured: single views 0.5-2.5 cm off, up to 6 cm with guided ones).
+                candidates = self._with_guided(frame, candidates, predicted, radius)
+                found = reference(model.points, candidates, tolerance, prior) if len(candidates) >= 3 else None
             found_points = candidates
-            if not found.recognised or found.T_cloud_model is None:
+            if found is None or not found.recognised or found.T_cloud_model is None:
                 continue
             T = found.T_cloud_model
             if prior is not None:
