@@ -4,7 +4,9 @@
 1. Harris corners of both rectified images are matched along epipolar lines, refined to sub-pixel and
    triangulated into a 3D cloud in the left camera frame (object corners and seabed points alike).
 2. Each requested characteristic-point set is identified in the cloud by structural coherence
-   (`perception_plugins.referencing.reference`), ambiguities settled by the prior.
+   (`perception_plugins.referencing.reference`), ambiguities settled by the prior. When it is not, and the prior
+   is tight (`guided_radius_m`), corners looked for where the prior puts the set's points
+   (`perception_plugins.referencing.guided`) join the cloud and the identification runs again.
 3. The least-squares transform of the identified points gives T_cam_object. A result that puts the object far
    from where the prior (database pose + navigation) says is refused as implausible: outliers can fake
    consistent sets, and the database is "off by metres", not by tens of metres. So is one that tilts the
