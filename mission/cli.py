@@ -16,6 +16,7 @@ from typing import Any
 from mission.cli_export import add_export_command, add_mcap_option, write_mcap_if_asked
 from mission.cli_onboard import add_onboard_commands
 from mission.cli_plan import add_plan_commands
+from mission.cli_reconstruct import add_reconstruct_command
 from mission.cli_report import add_report_command
 from mission.errors import AuvError, MissionError
 from mission.extras import has, require
@@ -328,6 +329,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_onboard_commands(sub)
     add_plan_commands(sub)
     add_report_command(sub)
+    add_reconstruct_command(sub)
     add_export_command(sub)
     return parser
 

@@ -30,9 +30,11 @@ BENCHMARKS: dict[str, str] = {
     "ordering": "mission.bench.ordering",
     "rrt": "mission.bench.rrt",
     "nbv": "mission.bench.nbv",
+    "explore-shapes": "mission.bench.explore_shapes",
     "multiview": "mission.bench.multiview",
     "vo": "mission.bench.vo",
     "photo-survey": "mission.bench.photo_survey",
+    "reconstruction": "mission.bench.reconstruction",
 }
 
 BenchFn = Callable[[bool], tuple[dict[str, Any], dict[str, dict[str, Any]]]]

@@ -1,0 +1,35 @@
+"""`auv reconstruct RUN_DIR --object ID [--out DIR]`: a mesh of an explored object from the run folder's stereo
+recording (`mission.reconstruct`)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+
+def _reconstruct(args: argparse.Namespace) -> int:
+    from mission.extras import MissingExtraError, has, require
+    from mission.reconstruct import reconstruct_run
+
+    for module in ("skimage", "trimesh"):  # marching cubes; PLY and glTF files
+        if not has(module):
+            raise MissingExtraError(f"`auv reconstruct` needs {module}, which is not installed: "
+                                    "pip install 'auv-mission[recon]'")
+    require("matplotlib", "the mesh picture (`auv reconstruct`)")
+    report = reconstruct_run(Path(args.run), args.object, Path(args.out) if args.out else None, args.voxel)
+    extent = report["object_extent"]
+    print(f"{report['object']}: {report['frames']} frame(s) from {report['recording']} ({report['pose_file']}), "
+          f"{report['triangles']:,} triangles, {report['area_m2']:.1f} m²"
+          + (f", {extent['height_m']:.2f} m above the seabed" if extent else ""))
+    print(f"written to {report['out']}: {', '.join(report['files'])}")
+    return 0
+
+
+def add_reconstruct_command(sub: Any) -> None:
+    p = sub.add_parser("reconstruct", help="a 3D mesh of an explored object from a run's stereo recording")
+    p.add_argument("run", help="run folder (its stereo recording: see `mission.reconstruct`)")
+    p.add_argument("--object", required=True, help="id of the explored object")
+    p.add_argument("--out", help="output folder (default RUN/models/OBJECT/reconstruction)")
+    p.add_argument("--voxel", type=float, default=0.02, help="voxel size in metres (default 0.02)")
+    p.set_defaults(func=_reconstruct)

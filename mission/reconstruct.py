@@ -1,0 +1,229 @@
+"""`auv reconstruct`: a 3D model of an explored object from a run folder's stereo recording (issue 22; seed 003
+"3D reconstruction", seed 002's exploration deliverable).
+
+The recording is a KITTI-layout folder (`mission.sim.stereo_record`): `image_0/NNNNNN.png`, `image_1/NNNNNN.png`
+(8-bit grey, left and right, rectified), `calib.txt` (`P0:`/`P1:`, 3×4 row-major; the baseline is −P1[0,3]/fx)
+and the left camera's pose per pair as 12 numbers (3×4 row-major T_world_left, camera → the mission's local NED
+frame; camera axes per OpenCV). The pose must be the *estimated* one: `nav.txt` when the folder has it (the
+simulator's recorder writes the truth to `poses.txt` and navigation's estimate to `nav.txt`), else `poses.txt`.
+The folder is looked for, in order, at RUN/models/ID, RUN/model/ID, RUN/stereo/ID, RUN/ID and RUN/stereo.
+
+The seabed is the plane most mesh vertices lie on (RANSAC); vertices more than `OBJECT_HEIGHT_M` above it are the
+object, and the outputs keep the object with `SEABED_MARGIN_M` of seabed around its footprint.
+
+Outputs in the output folder (default RUN/models/ID/reconstruction): `mesh.ply` and `mesh.glb` (the cleaned mesh
+with grey vertex colours, through trimesh), `points.ply` (the range maps' points, every 4th pixel, in the world
+frame), `report.json` (frames, timings, mesh size, the seabed plane and the object's extent above it) and
+`mesh.png` (a shaded picture of the mesh), and `object.yaml`: an `objects:` entry for a mission's database
+(`database_entry`: pose, size and characteristic-point sets proposed from the mesh; no `model:`, which the
+language reserves for multi-view model files).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mission.errors import AuvError
+
+Array = NDArray[np.float64]
+OBJECT_HEIGHT_M = 0.1
+"""Mesh vertices this far above the fitted seabed plane belong to the object."""
+MATCH_WIDTH_PX = 600
+"""Images are matched shrunk by the whole factor that brings them nearest this width."""
+SEABED_MARGIN_M = 1.0
+"""Seabed kept around the object's footprint in the outputs."""
+SEARCH = ("models/{id}", "model/{id}", "stereo/{id}", "{id}", "stereo")
+
+
+class ReconstructionError(AuvError):
+    """A run folder holds no usable stereo recording, or the recording yields no surface."""
+
+
+@dataclass(frozen=True, eq=False)
+class Recording:
+    folder: Path
+    K: Array
+    baseline: float
+    poses: Array
+    """(N, 4, 4) estimated T_world_left."""
+    pose_file: str
+    left: tuple[Path, ...]
+    right: tuple[Path, ...]
+
+
+def find_recording(run_dir: Path, object_id: str) -> Path:
+    """The first folder of `SEARCH` under the run folder that holds a `calib.txt`."""
+    for pattern in SEARCH:
+        folder = run_dir / pattern.format(id=object_id)
+        if (folder / "calib.txt").is_file():
+            return folder
+    tried = ", ".join(pattern.format(id=object_id) for pattern in SEARCH)
+    raise ReconstructionError(f"{run_dir}: no stereo recording for '{object_id}' (looked in {tried}; "
+                              "record with an explore element `actions: [model]` or `auv simulate --record-stereo`)")
+
+
+def _read_poses(path: Path) -> Array:
+    try:
+        rows = np.atleast_2d(np.loadtxt(path, ndmin=2))
+    except (OSError, ValueError) as e:
+        raise ReconstructionError(f"{path}: cannot read the poses: {e}") from e
+    if rows.shape[1] != 12:
+        raise ReconstructionError(f"{path}: expected 12 numbers a line (3×4 row-major T_world_left), "
+                                  f"got {rows.shape[1]}")
+    poses = np.tile(np.eye(4), (len(rows), 1, 1))
+    poses[:, :3, :4] = rows.reshape(-1, 3, 4)
+    return poses
+
+
+def read_recording(folder: Path) -> Recording:
+    """Calibration, estimated poses and image files of a KITTI-layout folder (see the module docstring)."""
+    try:
+        lines = dict(line.split(":", 1) for line in (folder / "calib.txt").read_text().splitlines() if ":" in line)
+        P0 = np.array(lines["P0"].split(), dtype=float).reshape(3, 4)
+        P1 = np.array(lines["P1"].split(), dtype=float).reshape(3, 4)
+    except (OSError, KeyError, ValueError) as e:
+        raise ReconstructionError(f"{folder / 'calib.txt'}: expected lines 'P0: 12 numbers' and 'P1: ...' ({e})") from e
+    K, baseline = P0[:, :3], -(P1[0, 3] - P0[0, 3]) / P0[0, 0]
+    pose_file = "nav.txt" if (folder / "nav.txt").is_file() else "poses.txt"
+    poses = _read_poses(folder / pose_file)
+    left = tuple(sorted((folder / "image_0").glob("*.png")))
+    right = tuple(sorted((folder / "image_1").glob("*.png")))
+    if not (len(left) == len(right) == len(poses)) or not left:
+        raise ReconstructionError(f"{folder}: image_0 ({len(left)}), image_1 ({len(right)}) and {pose_file} "
+                                  f"({len(poses)}) must hold the same, non-zero, number of frames")
+    return Recording(folder, K, float(baseline), poses, pose_file, left, right)
+
+
+def seabed_plane(points: Array, tolerance: float = 0.05, rounds: int = 3) -> Array:
+    """(a, b, c) of the seabed plane depth = a·north + b·east + c: least squares on the points within
+    `tolerance` of the current plane, started from the horizontal plane at the most common depth (2 cm bins;
+    the seabed is the largest surface the views see, and the object only rises above it)."""
+    z = points[:, 2]
+    edges = np.arange(z.min(), z.max() + 0.04, 0.02)
+    counts, edges = np.histogram(z, bins=edges) if len(edges) > 1 else (np.ones(1), np.array([z.min(), z.max()]))
+    k = int(np.argmax(counts))
+    plane = np.array([0.0, 0.0, 0.5 * (edges[k] + edges[k + 1])])
+    A = np.column_stack([points[:, 0], points[:, 1], np.ones(len(points))])
+    for _ in range(rounds):
+        inliers = np.abs(A @ plane - z) < tolerance
+        if inliers.sum() < 3:
+            break
+        plane = np.linalg.lstsq(A[inliers], z[inliers], rcond=None)[0]
+    return np.asarray(plane)
+
+
+def database_entry(object_id: str, vertices: Array, plane: Array) -> dict[str, Any] | None:
+    """An `objects:` entry for the mission language: the object frame has its origin on the seabed plane at the
+    north-west-most corner of the object's footprint box, axes north, east, down (heading 0); `size` is the box;
+    the characteristic-point sets are `propose_point_sets`' (a symmetric set is named so in `description`)."""
+    from perception_plugins.reconstruction.keypoints import propose_point_sets
+
+    height = plane[0] * vertices[:, 0] + plane[1] * vertices[:, 1] + plane[2] - vertices[:, 2]
+    above = vertices[height > OBJECT_HEIGHT_M]
+    if len(above) == 0:
+        return None
+    lo, hi = above[:, :2].min(axis=0), above[:, :2].max(axis=0)
+    depth0 = float(plane[0] * lo[0] + plane[1] * lo[1] + plane[2])
+    origin = np.array([lo[0], lo[1], depth0])
+    proposals = propose_point_sets(vertices[height > -0.05], plane)
+    sets, symmetric = [], []
+    for k, proposal in enumerate(proposals):
+        name = f"corners-{k + 1}"
+        sets.append({"id": name, "points": [[round(float(c), 3) for c in p - origin] for p in proposal.points]})
+        if proposal.symmetric:
+            symmetric.append(name)
+    size = [round(float(v), 2) for v in (*(hi - lo), float(height.max()))]
+    return {
+        "id": object_id,
+        "description": "reconstructed by `auv reconstruct`" + (
+            f"; symmetric sets (the prior heading must choose): {', '.join(symmetric)}" if symmetric else ""),
+        "pose": {"north": round(float(origin[0]), 3), "east": round(float(origin[1]), 3),
+                 "depth": round(depth0, 3), "heading": 0.0},
+        "size": [max(v, 0.01) for v in size],
+        "characteristic_points": sets,
+    }
+
+
+def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
+                    voxel_m: float = 0.02) -> dict[str, Any]:
+    """Reconstruct the object from the run's recording and write the outputs; returns the report."""
+    import cv2
+
+    from mission.reconstruct_io import render_picture, write_mesh, write_points
+    from perception_plugins.reconstruction import RangeSettings, ReconstructionSettings, fuse_views, points_from_range
+
+    recording = read_recording(find_recording(run_dir, object_id))
+    out = out_dir or run_dir / "models" / object_id / "reconstruction"
+    out.mkdir(parents=True, exist_ok=True)
+    maps: list[Any] = []
+
+    def views() -> Any:
+        for left, right, T in zip(recording.left, recording.right, recording.poses, strict=True):
+            pair = [cv2.imread(str(p), cv2.IMREAD_GRAYSCALE) for p in (left, right)]
+            if pair[0] is None or pair[1] is None:
+                raise ReconstructionError(f"cannot read {left} or {right}")
+            yield pair[0], pair[1], T
+
+    t0 = time.perf_counter()
+    # Match at about 600 pixels across (1200×900 pairs at half resolution; small images as they are).
+    scale = max(1, int(round(2.0 * recording.K[0, 2] / MATCH_WIDTH_PX)))
+    settings = ReconstructionSettings(voxel_m=voxel_m, range=RangeSettings(scale=scale))
+    result = fuse_views(views(), recording.K, recording.baseline, settings, maps)
+    if len(result.mesh.faces) == 0:
+        raise ReconstructionError(f"{recording.folder}: the range maps yield no surface")
+    clouds, greys = [], []
+    for rmap, T in zip(maps, recording.poses, strict=True):
+        pts, _ = points_from_range(rmap, stride=4)
+        clouds.append(pts @ T[:3, :3].T + T[:3, 3])
+        v, u = np.nonzero(np.isfinite(rmap.depth[::4, ::4]))
+        greys.append(rmap.image[::4, ::4][v, u])
+    points = np.vstack(clouds)
+    plane = seabed_plane(result.mesh.vertices)
+    mesh = result.mesh
+    height = plane[0] * mesh.vertices[:, 0] + plane[1] * mesh.vertices[:, 1] + plane[2] - mesh.vertices[:, 2]
+    above = mesh.vertices[height > OBJECT_HEIGHT_M]
+    if len(above):  # keep the object and the seabed around its foot, not the seabed to the edge of the views
+        lo, hi = above[:, :2].min(axis=0) - SEABED_MARGIN_M, above[:, :2].max(axis=0) + SEABED_MARGIN_M
+        inside = np.all((mesh.vertices[:, :2] >= lo) & (mesh.vertices[:, :2] <= hi), axis=1)
+        mesh = mesh.subset(inside[mesh.faces].all(axis=1))
+        keep = np.all((points[:, :2] >= lo) & (points[:, :2] <= hi), axis=1)
+        points, point_grey = points[keep], np.concatenate(greys)[keep]
+    else:
+        point_grey = np.concatenate(greys)
+    write_mesh(mesh, out)
+    entry = database_entry(object_id, mesh.vertices, plane) if len(above) else None
+    if entry is not None:
+        import yaml
+
+        (out / "object.yaml").write_text(yaml.safe_dump({"objects": [entry]}, sort_keys=False), encoding="utf-8")
+    write_points(points, point_grey, out / "points.ply")
+    render_picture(mesh, out / "mesh.png", title=f"{object_id}: {len(mesh.faces):,} triangles")
+    report: dict[str, Any] = {
+        "object": object_id, "recording": str(recording.folder), "pose_file": recording.pose_file,
+        "frames": result.frames, "voxel_m": voxel_m, "match_scale": scale,
+        "triangles": int(len(mesh.faces)), "triangles_before_cleaning": int(len(result.raw_mesh.faces)),
+        "area_m2": round(float(mesh.face_areas().sum()), 3),
+        "seabed_plane": {"a": float(plane[0]), "b": float(plane[1]), "c": float(plane[2]),
+                         "meaning": "depth = a*north + b*east + c"},
+        "object_extent": ({"min": above.min(axis=0).round(3).tolist(), "max": above.max(axis=0).round(3).tolist(),
+                           "height_m": round(float(height.max()), 3)} if len(above) else None),
+        "seconds": {"depth_per_frame": float(np.median(result.depth_s)),
+                    "fusion_per_frame": float(np.median(result.fusion_s)),
+                    "extract_and_clean": result.extract_s, "wall_total": time.perf_counter() - t0},
+        "volume_mb": round(result.volume.nbytes / 1e6, 2),
+        "files": ["mesh.ply", "mesh.glb", "points.ply", "mesh.png", "report.json"]
+        + (["object.yaml"] if entry is not None else []), "out": str(out),
+    }
+    (out / "report.json").write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
+    return report
+
+
+__all__ = ["Recording", "ReconstructionError", "database_entry", "find_recording", "read_recording", "reconstruct_run",
+           "seabed_plane"]
