@@ -86,14 +86,14 @@ def test_record_writes_the_elements_pairs_with_estimated_left_camera_poses_and_o
     assert start <= recording.times[0] and recording.times[-1] <= start + go["duration_s"] + 0.5
     # poses.txt is the estimate: the left camera at the navigation's pose of that tick, not the truth
     rows = {round(r[0], 6): r for r in result.vehicle.log.rows}
-    truth = dict(result.vehicle.log.frames)
+    truth = {round(t, 6): T for t, T in result.vehicle.log.frames}
     offsets = []
     for t, T in zip(recording.times, recording.poses, strict=True):
         row = rows[round(float(t), 6)]
         north, east, depth, heading = (float(row[k]) for k in (6, 7, 8, 9))
         expected = camera_pose(north, east, depth, heading, baseline=0.25)
         assert np.allclose(T[:3, :4], expected[:3, :4], atol=1e-6)
-        offsets.append(float(np.linalg.norm(T[:3, 3] - truth[float(t)][:3, 3])))
+        offsets.append(float(np.linalg.norm(T[:3, 3] - truth[round(float(t), 6)][:3, 3])))
     assert 0.0 < max(offsets) < 5.0  # dead reckoning between USBL fixes: apart from the truth, by metres at most
 
 
