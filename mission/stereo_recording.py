@@ -92,9 +92,9 @@ class StereoRecorder:
                 raise StereoRecordError(f"expected 8-bit grey images, got {grey.dtype} {grey.shape}")
             if not cv2.imwrite(str(self.folder / sub / name), grey):
                 raise StereoRecordError(f"{self.folder / sub / name}: cannot write the image")
-        lines = [("times", f"{images.time:.6e}\n")] + [(k, _pose_line(T)) for k, T in zip(self.pose_files, poses,
-                                                                                             strict=True)]
-        for key, line in lines:
+        entries = [("times", f"{images.time:.6e}\n")] + [(k, _pose_line(T)) for k, T in zip(self.pose_files, poses,
+                                                                                               strict=True)]
+        for key, line in entries:
             self._files[key].write(line)
             self._files[key].flush()
         self.frames += 1

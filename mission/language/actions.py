@@ -81,10 +81,10 @@ def check_actions(doc: Located, route: list[tuple[int, RouteElement]], sensors: 
             problem = _action_problem(element, action, sensors)
             if problem:
                 out.append(doc.diagnostic(where, problem))
-        for action, why in REQUIRED_ACTIONS.get(element.kind, ()):
-            if action not in element.actions:
+        for needed, why in REQUIRED_ACTIONS.get(element.kind, ()):
+            if needed not in element.actions:
                 out.append(doc.diagnostic(("route", i, element.kind), f"{element.kind} element '{element.id}' "
-                                          f"must list `{action}` in its actions: {why}"))
+                                          f"must list `{needed}` in its actions: {why}"))
         p = element.params
         if isinstance(p, Explore) and p.sensor not in EXPLORE_SENSORS[p.planner]:
             uses = " or ".join(EXPLORE_SENSORS[p.planner])
