@@ -78,7 +78,12 @@ def _figure_png(campaigns: list[dict[str, Any]]) -> str:
     panels = [(f"{kind}.{key}", label, [_values(c, kind, key) for c in campaigns]) for kind, key, label, _ in FIGURES]
     panels = [p for p in panels if any(p[2])]
     panels.append(("nav", "worst navigation error per run (m)", [_nav_errors(c) for c in campaigns]))
-    fig, axes = plt.subplots(1, len(panels) + 1, figsize=(3.2 * (len(panels) + 1), 3.0))
+    columns = min(3, len(panels) + 1)
+    rows = -(-(len(panels) + 1) // columns)
+    fig, grid = plt.subplots(rows, columns, figsize=(3.6 * columns, 3.1 * rows), squeeze=False)
+    axes = list(grid.flat)
+    for spare in axes[len(panels) + 1:]:
+        spare.set_visible(False)
     names = [c["folder"].name for c in campaigns]
     success = axes[0]
     ids = list(dict.fromkeys(i for c in campaigns for i in c["summary"]["elements"]))
@@ -91,7 +96,7 @@ def _figure_png(campaigns: list[dict[str, Any]]) -> str:
     success.set_ylabel("succeeded (%)")
     success.set_ylim(0, 105)
     success.set_title("success per element", fontsize=9)
-    for ax, (_, label, series) in zip(axes[1:], panels, strict=True):
+    for ax, (_, label, series) in zip(axes[1:len(panels) + 1], panels, strict=True):
         for k, values in enumerate(series):
             ax.scatter([k + 0.1 * ((j % 5) - 2) for j in range(len(values))], values, s=12, label=names[k])
         ax.set_xticks(range(len(series)), names, fontsize=7)
@@ -134,7 +139,7 @@ def render(campaign: dict[str, Any], against: dict[str, Any] | None, out: Path) 
     title = f"Campaign report: {campaign.get('mission', campaign['folder'].name)}"
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>",
              "<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}"
-             "td,th{border:1px solid #ccc;padding:3px 8px;font-size:90%}</style></head><body>",
+             "td,th{border:1px solid #ccc;padding:3px 8px;font-size:90%}img{max-width:100%}</style></head><body>",
              f"<h1>{html.escape(title)}</h1>"]
     header = "".join(f"<th>{html.escape(str(c['folder']))}</th>" for c in campaigns)
     parts.append(f"<h2>Summary</h2><table id='summary'><tr><th></th>{header}</tr>")

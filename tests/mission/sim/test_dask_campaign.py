@@ -27,12 +27,13 @@ def rows_without_wall_times(report: dict) -> list[dict]:
     return [{k: v for k, v in row.items() if k not in WALL} for row in report["runs"]]
 
 
-def test_a_local_cluster_gives_the_campaign_of_local_processes(tmp_path):
-    local = run_campaign(MISSION, [1, 2], tmp_path / "local", jobs=1)
-    dask = run_campaign(MISSION, [1, 2], tmp_path / "dask", jobs=2, dask="")
+def test_a_four_seed_campaign_on_a_local_cluster_equals_local_processes(tmp_path):
+    seeds = [1, 2, 3, 4]
+    local = run_campaign(MISSION, seeds, tmp_path / "local", jobs=2)
+    dask = run_campaign(MISSION, seeds, tmp_path / "dask", jobs=2, dask="")
     assert rows_without_wall_times(dask) == rows_without_wall_times(local)
-    assert dask["summary"]["completed"] == 2
-    for seed in (1, 2):
+    assert dask["summary"]["completed"] == 4
+    for seed in seeds:
         assert (tmp_path / "dask" / f"seed-{seed}" / "metrics.json").is_file()
     assert json.loads((tmp_path / "dask" / "campaign.json").read_text())["summary"] == dask["summary"]
 
