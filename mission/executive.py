@@ -27,6 +27,7 @@ from mission.knowledge import Knowledge
 from mission.language.models import Mission, RouteElement, Transit
 from mission.plugin_host import PluginHost
 from mission.safety import SafetyMonitors, Violation, abort_legs, policy_record
+from mission.stereo_recording import RECORDING_ACTIONS, ElementStereo
 from mission.strategy import StrategicLevel
 from mission.vehicle import Command, NavState, Observation, VehicleInterface
 
@@ -55,6 +56,7 @@ class ElementReport:
     reason: str = ""
     planned_path: list[tuple[float, float]] = field(default_factory=list)
     details: AgentReport = field(default_factory=AgentReport)
+    recorded_pairs: int | None = None  # stereo pairs its `record`/`model` action recorded (`stereo/ID/`)
 
     @property
     def duration_s(self) -> float:
@@ -162,16 +164,23 @@ class Executive:
             return rep
         aided = self.usbl_available and agent.navigation == "usbl"
         self.vehicle.set_aiding(aided)
+        recording = ElementStereo(self.artifacts.root, element_id) \
+            if any(a in RECORDING_ACTIONS for a in element.actions) else None
+        extra = frozenset({"stereo"}) if recording is not None else frozenset()
         payload, rate = agent.payload, agent.frame_rate_hz
-        self.vehicle.set_payload(payload)
+        self.vehicle.set_payload(payload | extra)
         self.vehicle.set_frame_rate(rate)
         self.emit("element_started", nav.time, element=element_id, kind=kind, timeout_s=timeout,
                   navigation="usbl" if aided else "dead-reckoning", planned_path=rep.planned_path, abort=aborting)
         try:
-            self._loop(rep, agent, element_id, timeout, aborting, payload, rate, aided)
+            self._loop(rep, agent, element_id, timeout, aborting, payload, rate, aided, recording)
         except LinkLostError as exc:
             rep.status, rep.reason = ElementStatus.ABORTED, f"link lost: {exc}"
             self.report.link_lost = True
+        finally:
+            if recording is not None:
+                recording.close()
+                rep.recorded_pairs = recording.pairs
         nav = self._last_nav if self._last_nav is not None else nav
         try:
             agent.stop()
@@ -205,13 +214,18 @@ class Executive:
         return False
 
     def _loop(self, rep: ElementReport, agent: Agent, element_id: str, timeout: float, aborting: bool,
-              payload: frozenset[str], rate: float | None, aided: bool) -> None:
-        """Step the agent every control tick until it ends, times out, trips a monitor or is stopped."""
+              payload: frozenset[str], rate: float | None, aided: bool, recording: ElementStereo | None = None
+              ) -> None:
+        """Step the agent every control tick until it ends, times out, trips a monitor or is stopped; with
+        `recording`, the stereo camera stays on and every pair is recorded."""
         paused_at_start = self.report.paused_s
+        extra = frozenset({"stereo"}) if recording is not None else frozenset()
         while True:
             obs = self.vehicle.observe()
             nav = obs.nav
             self._last_nav = nav
+            if recording is not None:
+                recording.add(obs)
             if self._paused(obs, element_id):
                 self._violations(nav, element_id)  # logged; the pilot is responsible while in control
                 self.vehicle.advance()
@@ -239,7 +253,7 @@ class Executive:
                 return
             if agent.payload != payload:
                 payload = agent.payload
-                self.vehicle.set_payload(payload)
+                self.vehicle.set_payload(payload | extra)
             if (self.usbl_available and agent.navigation == "usbl") != aided:
                 aided = self.usbl_available and agent.navigation == "usbl"
                 self.vehicle.set_aiding(aided)

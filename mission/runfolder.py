@@ -7,7 +7,11 @@
     DIR/usbl.csv          acoustic fixes: time, north, east, used, accepted
     DIR/events.jsonl      events, flushed as they happened
     DIR/metrics.json      the run's metrics, written last: the folder's end marker (`check_complete`)
-    DIR/maps/ELEMENT.npz  maps an element built (survey: depth, info, north0, east0, cell, lines)
+    DIR/maps/ELEMENT.npz  maps an element with the `map` action built (survey: depth, info, north0, east0, cell,
+                          lines)
+    DIR/photos/           photographs of photo surveys (`mission.sim.photos`); inspections' under their element
+    DIR/stereo/ELEMENT/   stereo pairs of an element with the `record` or `model` action (KITTI layout, estimated
+                          poses: `mission.stereo_recording`)
     DIR/plots/*.png       figures (`auv plot DIR` redraws them)
     DIR/.auv-run          the marker, locked while a run writes the folder (`mission.runlock`)
 
@@ -22,7 +26,7 @@ import json
 import math
 import os
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Collection, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
@@ -154,14 +158,17 @@ def write_metrics(out: Path, metrics: dict[str, Any]) -> None:
 
 
 def write_run_results(out: Path, metrics: dict[str, Any], rows: Iterable[Sequence[object]] | None, fixes: Iterable[Any],
-                      knowledge: Knowledge | None = None) -> None:
+                      knowledge: Knowledge | None = None, maps_for: Collection[str] | None = None) -> None:
     """The results of a run at its end; `metrics.json`, written last, marks the folder complete (`rows`: the
-    trajectory when it was not streamed as the run went, None when it was)."""
+    trajectory when it was not streamed as the run went, None when it was). The maps of the elements in
+    `maps_for` (those with the `map` action; every element's when None) go to `maps/ELEMENT.npz`."""
     if rows is not None:
         write_trajectory(out, rows)
     write_usbl(out, fixes)
     if knowledge is not None and knowledge.maps:
         for element, products in knowledge.maps.items():
+            if maps_for is not None and element not in maps_for:
+                continue
             arrays = {k: np.asarray(v) for k, v in products.items() if k != "lines"}
             lines = np.asarray(products.get("lines", []), dtype=float).reshape(-1, 2, 2)
             arrays["lines"] = lines

@@ -153,6 +153,7 @@ route:
     actions: [map, detect_objects]
   - id: scan
     explore: {{object: detected, sensor: scanner, safe_distance: 6, budget: 4min}}
+    actions: [map]
 """, encoding="utf-8")
     result = simulate(load_mission(path), out=path.parent / "run", plots=True)
     return {"metrics": result.metrics, "out": path.parent / "run", "vehicle": result.vehicle,
@@ -245,6 +246,7 @@ objects:
 route:
   - id: photos
     explore: {object: plate, sensor: stereo, planner: rrt-photo, safe_distance: 4, budget: 5min}
+    actions: [photograph, map]
 """
 
 

@@ -7,9 +7,10 @@ several), Dubins curves for the turning radius checked against the occupancy map
 map, from the area's corner nearest the vehicle on the heading it arrives with, until at most `ENOUGH` of the
 area's information is unrevealed. Its path budget is the length of the spacing-scaled lawnmower over the same area
 (`planners.rrt.photo_survey_path`), capped by `BUDGET_SHARE` of the element's time budget at the survey speed;
-the lawnmower is flown instead when the RIG finds no clear way from its start. The camera
-flies `safe_distance + NAV_MARGIN_M` above the object's top (within the stereo range); photographs are triggered
-at the plan's photo points: the agent switches the camera on, takes the first pair that arrives with the
+the lawnmower is flown instead when the RIG finds no clear way from its start. The camera flies `safe_distance +
+NAV_MARGIN_M` above the object's top (within the stereo range); photographs are triggered at the plan's photo points
+when the element has the `photograph` action (without it the plan is flown and no photograph is taken, as for a
+`model` recording of the area): the agent switches the camera on, takes the first pair that arrives with the
 *estimated* pose, and switches it off; a photo point the vehicle passes without coming near is given up once the
 path follower is `SKIP_LEGS` legs past it. `photo_coverage_percent` is the share of the object's area inside the
 union of the photographs' footprints, placed at their estimated poses. The pairs go into `Knowledge.maps` and
@@ -115,6 +116,7 @@ class PhotoSurveyRun:
                     math.degrees(2 * math.atan(stereo.height / 2 / stereo.fx)))
         self.altitude = min(p.safe_distance + NAV_MARGIN_M, 0.9 * stereo.max_range)
         self.payload: frozenset[str] = frozenset()
+        self.photographs = "photograph" in context.element.actions  # without it the plan is flown, no photo taken
         self.finished = False
         self.plans: list[tuple[Target, PhotoSurvey | InformativeSurvey, np.ndarray]] = []
         self.fields: list[InformationField] = []
@@ -180,7 +182,7 @@ class PhotoSurveyRun:
         while not self.payload and self.next_photo < len(points) and \
                 self.photo_at[self.next_photo] < self.follower.leg - 1 - SKIP_LEGS:
             self.next_photo += 1  # passed without coming near it: missed, the next one is due
-        if not self.payload and self.next_photo < len(points):
+        if self.photographs and not self.payload and self.next_photo < len(points):
             p = points[self.next_photo]
             ahead = (p[0] - nav.north) * math.cos(math.radians(nav.heading)) + \
                 (p[1] - nav.east) * math.sin(math.radians(nav.heading))

@@ -19,6 +19,7 @@ from shapely.geometry import Polygon as ShapelyPolygon
 from shapely.validation import explain_validity
 
 from mission.errors import Diagnostic
+from mission.language.actions import check_actions
 from mission.language.models import (
     Home,
     Inspect,
@@ -248,4 +249,5 @@ def _check_viewpoints(doc: Located, parts: Parts) -> list[Diagnostic]:
 def cross_check(doc: Located, parts: Parts) -> list[Diagnostic]:
     """Every cross-section problem of a mission whose sections validated (fully or partly)."""
     return (_check_objects(doc, parts) + _check_route(doc, parts) + _check_envelope(doc, parts)
-            + _check_viewpoints(doc, parts) + check_timing(doc, parts))
+            + _check_viewpoints(doc, parts) + check_timing(doc, parts)
+            + check_actions(doc, parts.route, parts.sensors))

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from mission.action_results import add_action_results
 from mission.agents import REGISTRY
 from mission.artifacts import Artifacts
 from mission.errors import MissionError, UnsupportedMissionError
@@ -155,6 +156,7 @@ def run_onboard(mission: Mission, uri: str, out: str | Path, connect_timeout: fl
         wall = time.perf_counter() - wall0
         metrics = onboard_metrics(mission.name, seed, report, wall, recording.distance_m,
                                   recording.energy_used_wh, mission.vehicle.energy_wh)
+        add_action_results(metrics, mission, report, ())  # no maps are written onboard
         if isinstance(vehicle, StreamedVehicle):
             metrics["sensors"] = vehicle.stream_metrics()
         if stop.signum is not None:

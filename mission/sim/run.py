@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from mission.action_results import add_action_results, mapped_elements
 from mission.agents import REGISTRY
 from mission.errors import AuvError, RunFolderError, UnsupportedMissionError
 from mission.events import EventLog
@@ -143,6 +144,8 @@ def _run(mission: Mission, seed: int, vehicle: SimulatedVehicle, scene: Scene, o
             metrics["plugins"] = host.stats()
         if stop.signum is not None:
             metrics.update(interrupted=True, signal=signal_name(stop.signum))
+        mapped = mapped_elements(mission) & set(report.knowledge.maps) if out_dir is not None else set()
+        add_action_results(metrics, mission, report, mapped)
         if out_dir is not None and writer is not None:
             from mission.runfolder import write_run_results
             from mission.sim.photos import write_photos
@@ -151,7 +154,7 @@ def _run(mission: Mission, seed: int, vehicle: SimulatedVehicle, scene: Scene, o
             write_photos(out_dir, report.knowledge, vehicle)  # photo surveys' pairs: photos/, out of the maps
             if stop.signum is not None:
                 log.emit("interrupted", vehicle.truth.time, signal=signal_name(stop.signum))
-            write_run_results(out_dir, metrics, None, vehicle.log.fixes, report.knowledge)
+            write_run_results(out_dir, metrics, None, vehicle.log.fixes, report.knowledge, mapped)
         log.emit("mission_finished", finished.pop("time", vehicle.truth.time), **finished)
     except Interrupted as exc:
         stop.closing = True
@@ -188,7 +191,7 @@ def _write_interrupted(mission: Mission, seed: int, executive: Executive | None,
         from mission.runfolder import write_run_results
 
         writer.close()
-        write_run_results(out_dir, metrics, None, vehicle.log.fixes, report.knowledge)
+        write_run_results(out_dir, metrics, None, vehicle.log.fixes, report.knowledge, mapped_elements(mission))
     log.emit("mission_finished", vehicle.truth.time, completed=False, aborted=True, interrupted=True,
              reason=f"interrupted by {signal_name(signum)}")
 
