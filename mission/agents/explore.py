@@ -93,8 +93,7 @@ class ExploreAgent(Agent):
         self.runs: list[TargetRun] = []
         self.track: list[tuple[float, float, float, float]] = []
         self.details = self.report = ExploreReport(p.planner)
-        context.emit("explore_sensor", context.nav.time, element=context.element.id, sensor=p.sensor,
-                     planner=p.planner)  # the loader has checked that the planner flies with this sensor
+        context.emit("explore_sensor", context.nav.time, element=context.element.id, sensor=p.sensor, planner=p.planner)
         if p.planner == "rrt-photo":
             from mission.agents.photo_survey import PhotoSurveyRun
 

@@ -55,7 +55,7 @@ def rate_set(set_id: str, points: np.ndarray, camera: Stereo) -> Detectability:
     >>> s = Stereo(width=1200, height=900, fx=1000.0, baseline=0.25, max_range=8.0)
     >>> tall = rate_set("top", np.array([[2, 1, -2], [6, 1, -2], [6, 4, -2], [2, 4, -2], [4, 2.5, -2.6]]), s)
     >>> low = rate_set("skid", np.array([[8, 0, 0], [8, 5, 0], [7, .5, -.3], [7, 4.5, -.3], [6.5, 2.5, -.4]]), s)
-    >>> tall.rating > low.rating > 0
+    >>> bool(tall.rating > low.rating > 0)
     True
     """
     pts = np.asarray(points, dtype=float).reshape(-1, 3)

@@ -80,6 +80,7 @@ objects:
 route:
   - id: look
     inspect: {{object: rig, targets: all}}
+    actions: [photograph]
 """, encoding="utf-8")
     return load_mission(path)
 
@@ -149,6 +150,7 @@ def target_visible(vehicle: Any, scene: Scene, photo_time: float, target_object:
     truth = next(o for o in scene.objects if o.database == "rig")
     target_world = transform_points(truth.T_world_object, target_object[None, :])[0]
     p_cam = transform_points(invert(T_world_left), target_world[None, :])[0]
+    vehicle.camera.depth = True  # the vehicle's camera skips the depth read-back; the test reads the truth
     frame = vehicle.camera.render(T_world_left)
     u = frame.K[0, 0] * p_cam[0] / p_cam[2] + frame.K[0, 2]
     v = frame.K[1, 1] * p_cam[1] / p_cam[2] + frame.K[1, 2]
