@@ -34,17 +34,21 @@ def ping(t: float) -> SonarPing:
 
 
 class ThreadDriver:
-    """A driver that calls the sink from its own thread with the frames `make(i)` until it runs out or is closed."""
+    """A driver that calls the sink from its own thread with the frames `make(i)` until it runs out or is closed;
+    like a real sensor, it starts sending once it is asked to (so none come while the sensor is off)."""
 
     def __init__(self, context: DriverContext, make: Callable[[int], SensorFrame | None], period: float):
         self.context, self.make, self.period = context, make, period
         self.requests: list[tuple[bool, float | None]] = []
         self.stop = threading.Event()
+        self.asked = threading.Event()
         self.thread = threading.Thread(target=self.run, daemon=True)
         self.thread.start()
 
     def run(self) -> None:
         i = 0
+        if not self.asked.wait(5.0):
+            return
         while not self.stop.wait(self.period):
             frame = self.make(i)
             if frame is None:
@@ -54,9 +58,12 @@ class ThreadDriver:
 
     def request(self, on: bool, rate_hz: float | None) -> None:
         self.requests.append((on, rate_hz))
+        if on:
+            self.asked.set()
 
     def close(self) -> None:
         self.stop.set()
+        self.asked.set()
         self.thread.join(1.0)
 
 
