@@ -26,6 +26,7 @@ BENCHMARKS: dict[str, str] = {
     "coverage": "mission.bench.coverage",
     "stereo": "mission.bench.stereo",
     "referencing": "mission.bench.referencing",
+    "referencing-sets": "mission.bench.referencing_sets",
     "ordering": "mission.bench.ordering",
     "rrt": "mission.bench.rrt",
     "nbv": "mission.bench.nbv",
