@@ -162,7 +162,8 @@ class ReferenceAgent(Agent):
             if self._enough_views() and self._fuse(T_world_cam, record):
                 self.succeed()
                 return
-            shift = FINE_SHIFT_M * (1 if (len(self.views) + len(self.guided_views)) % 2 else -1)  # 0, +shift, 0, +shift ... along x
+            taken = len(self.views) + len(self.guided_views)
+            shift = FINE_SHIFT_M * (1 if taken % 2 else -1)  # 0, +shift, 0, +shift ... along x
             x_axis = self.T_world_object_est[:3, 0]
             self.fine = Goal(self.fine.north + shift * float(x_axis[0]), self.fine.east + shift * float(x_axis[1]),
                              self.fine.depth, self.fine.heading)
