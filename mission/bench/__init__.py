@@ -30,6 +30,7 @@ BENCHMARKS: dict[str, str] = {
     "ordering": "mission.bench.ordering",
     "rrt": "mission.bench.rrt",
     "nbv": "mission.bench.nbv",
+    "explore-shapes": "mission.bench.explore_shapes",
     "multiview": "mission.bench.multiview",
     "vo": "mission.bench.vo",
     "photo-survey": "mission.bench.photo_survey",
