@@ -31,6 +31,11 @@ def _validate(args: argparse.Namespace) -> int:
         mission, diags = validate_mission_file(path)
         for d in diags:
             print(d)
+        if mission is not None and not args.quiet:
+            from mission.language.detectability import detectability_notes
+
+            for note in detectability_notes(path, mission):
+                print(note)
         if args.estimate and mission is not None:
             from mission.cli_plan import print_estimate
 

@@ -260,11 +260,11 @@ class ExploreAgent(Agent):
     def _propose(self, nav: NavState, here: np.ndarray) -> Command:
         run = self.run
         assert run is not None and self.goal is not None
+        t0, c0 = time.perf_counter(), time.process_time()
         run.estimate = run.coverage_estimate()
         if run.estimate >= COVERAGE_TARGET:
             self._next_target(nav, "coverage target")
             return self._hold() if self.phase is not Phase.APPROACH else self._approach(nav, here)
-        t0 = time.perf_counter()
         pose = View.at(here, nav.heading, -(self.tilt or 25.0))
         view = run.planner.propose(pose)
         if view is None and run.planner.focus is not None:
@@ -278,6 +278,7 @@ class ExploreAgent(Agent):
             return self._hold() if self.phase is not Phase.APPROACH else self._approach(nav, here)
         path = connect(run.planner.safety, here, view.point, self.safe, seed=self.context.mission.seed)
         run.iterations_ms.append(1e3 * (time.perf_counter() - t0))
+        run.iterations_cpu_ms.append(1e3 * (time.process_time() - c0))
         if path is None:
             run.planner.reject(view)
             run.rejected += 1
@@ -311,11 +312,14 @@ class ExploreAgent(Agent):
             return
         objects, products = nbv_results(self.runs, self.t0)
         all_it = [t for r in self.runs for t in r.iterations_ms]
+        all_cpu = [t for r in self.runs for t in r.iterations_cpu_ms]
         self.report.objects, self.report.views = objects, sum(len(r.views) for r in self.runs)
         self.report.resolution_m = RESOLUTION_M
         self.report.figures.update({
             "iteration_time_ms": {"mean": round(float(np.mean(all_it)), 1) if all_it else None,
                                   "max": round(float(np.max(all_it)), 1) if all_it else None},
+            "iteration_cpu_ms": {"mean": round(float(np.mean(all_cpu)), 1) if all_cpu else None,
+                                 "max": round(float(np.max(all_cpu)), 1) if all_cpu else None},
             "safe_distance_m": self.params.safe_distance, "planning_distance_m": self.safe,
             "scanner_tilt_deg": round(self.tilt, 2) if self.tilt is not None else None})
         self.context.knowledge.maps[self.context.element.id] = {

@@ -167,3 +167,30 @@ def seabed_depth(products: dict[str, Any] | None, target: Target, radius: float)
     j0, j1 = int((target.east - radius - e0) / cell), int((target.east + radius - e0) / cell) + 1
     window = depth[max(i0, 0):max(i1, 0), max(j0, 0):max(j1, 0)]
     return float(np.nanmax(window)) if window.size and np.isfinite(window).any() else target.bottom_depth
+
+
+def seabed_plane(products: dict[str, Any] | None, target: Target, fallback: float,
+                 ring: tuple[float, float] = (1.0, 5.0)) -> tuple[float, float, float]:
+    """The seabed under a target as a plane, depth = a + b·north + c·east (estimated frame), least-squares fitted
+    to the soundings in a ring `ring` metres beyond its footprint's circle (the object itself hides the seabed
+    under it); flat at `fallback` without a survey or with too few soundings.
+
+    >>> nn, ee = np.meshgrid(np.arange(40) * 0.5, np.arange(40) * 0.5, indexing="ij")
+    >>> depth = 50.0 + 0.01 * nn - 0.02 * ee
+    >>> t = Target("x", 10.0, 10.0, 2.0, 47.0, 50.0, 2.0, 2.0, 0.0, "detected")
+    >>> [round(v, 4) for v in seabed_plane({"depth": depth, "cell": 0.5, "north0": 0.0, "east0": 0.0}, t, 0.0)]
+    [50.0, 0.01, -0.02]
+    """
+    if products is None:
+        return fallback, 0.0, 0.0
+    depth = np.asarray(products["depth"], dtype=float)
+    cell, n0, e0 = float(products["cell"]), float(products["north0"]), float(products["east0"])
+    nn = np.broadcast_to(n0 + np.arange(depth.shape[0])[:, None] * cell, depth.shape)
+    ee = np.broadcast_to(e0 + np.arange(depth.shape[1])[None, :] * cell, depth.shape)
+    r = np.hypot(nn - target.north, ee - target.east)
+    use = np.isfinite(depth) & (r >= target.radius + ring[0]) & (r <= target.radius + ring[1])
+    if use.sum() < 12:
+        return fallback, 0.0, 0.0
+    a = np.column_stack([np.ones(int(use.sum())), nn[use], ee[use]])
+    coef = np.linalg.lstsq(a, depth[use], rcond=None)[0]
+    return float(coef[0]), float(coef[1]), float(coef[2])

@@ -24,7 +24,8 @@ def database_pose(obj: KnownObject) -> np.ndarray:
 
 
 def attempt_record(result: ReferencingResult) -> dict[str, Any]:
-    """The JSON fields of one referencing attempt that both agents log: whether and how well a set was matched."""
+    """The JSON fields of one referencing attempt that both agents log: whether and how well a set was matched,
+    and whether the plug-in needed its guided corners for it."""
     return {"recognised": bool(result.recognised), "matched": int(result.matched),
             "residual_m": float(result.residual_rms), "ambiguous": bool(result.ambiguous),
-            "cloud_points": int(result.cloud_points)}
+            "cloud_points": int(result.cloud_points), "guided": bool(result.details.get("guided", False))}

@@ -79,6 +79,7 @@ class ReferenceAgent(Agent):
         self.fine_tries = 0
         self.T_world_object_est: np.ndarray | None = None
         self.views: list[View] = []  # (model points, world points) of fine views
+        self.guided_views: list[View] = []  # ... of fine views that needed the plug-in's guided corners
         # Near the object the DVL's relative navigation is steadier than acoustic fixes, whose updates would
         # shift the estimate between the views that are fused.
         self.navigation = "dead-reckoning"
@@ -156,11 +157,13 @@ class ReferenceAgent(Agent):
                 self.fine = self._fine_pose(str(result.set_id))
                 return
             if result.model_points is not None and result.points_cam is not None:
-                self.views.append((result.model_points, transform_points(T_world_cam, result.points_cam)))
-            if len(self.views) >= FINE_VIEWS and self._fuse(T_world_cam, record):
+                view = (result.model_points, transform_points(T_world_cam, result.points_cam))
+                (self.guided_views if result.details.get("guided") else self.views).append(view)
+            if self._enough_views() and self._fuse(T_world_cam, record):
                 self.succeed()
                 return
-            shift = FINE_SHIFT_M * (1 if len(self.views) % 2 else -1)  # 0, +shift, 0, +shift ... along x
+            taken = len(self.views) + len(self.guided_views)
+            shift = FINE_SHIFT_M * (1 if taken % 2 else -1)  # 0, +shift, 0, +shift ... along x
             x_axis = self.T_world_object_est[:3, 0]
             self.fine = Goal(self.fine.north + shift * float(x_axis[0]), self.fine.east + shift * float(x_axis[1]),
                              self.fine.depth, self.fine.heading)
@@ -168,16 +171,22 @@ class ReferenceAgent(Agent):
         if self.fine is not None and self.fine_tries < 2 * FINE_VIEWS:
             self.fine_tries += 1
             return
-        self.fine, self.fine_tries, self.T_world_object_est, self.views = None, 0, None, []
+        self.fine, self.fine_tries, self.T_world_object_est, self.views, self.guided_views = None, 0, None, [], []
         self.index += 1
         if self.index >= len(self.positions):
             self.fail(f"no point set of '{self.obj.id}' recognised in {len(self.report.attempts)} attempts")
+
+    def _enough_views(self) -> bool:
+        """`FINE_VIEWS` views from the whole-image cloud; views that needed the plug-in's guided corners (less
+        precise) count only once as many again have been taken."""
+        return len(self.views) >= FINE_VIEWS or len(self.views) + len(self.guided_views) >= 2 * FINE_VIEWS
 
     def _fuse(self, T_world_cam: np.ndarray, last: dict[str, Any]) -> bool:
         """One least-squares transform from the points of the agreeing fine views (seed 000, approach 3), placed
         in the world with the (dead-reckoned) estimate of each view; the camera pose of the last view in it.
         False while fewer than two views agree."""
-        fused = fuse_views(self.views, VIEW_AGREEMENT_M)
+        views = self.views if len(self.views) >= FINE_VIEWS else self.views + self.guided_views
+        fused = fuse_views(views, VIEW_AGREEMENT_M)
         if fused is None:
             return False
         self.T_world_object_est = fused.T

@@ -3,8 +3,8 @@
 For each object the agent explored, matched to the true object it is (the nearest within `MATCH_RADIUS_M`):
 
 * `surface_observed_percent`: the share of the object's TRUE surface voxels (voxels of the agent's resolution
-  holding a point of a part's exposed surface: neither inside another part nor within `CONTACT_M` of the seabed
-  or below it — where a part meets the seabed no sensor sees it) in which a
+  holding a patch of a part's exposed surface, sampled at a third of a voxel: neither inside another part nor
+  within `CONTACT_M` of the seabed or below it — where a part meets the seabed no sensor sees it) in which a
   scanner ray truly ended: the simulator logs, for every frame, the exact surface points its rays hit on
   objects, cast from the true pose. This is what the sensor observed, whatever the navigation error;
 * `map_surface_percent`: the share of the same true surface voxels next to (within one voxel of) a voxel the
@@ -53,7 +53,11 @@ def part_frame(obj: PlacedObject, part: Part) -> tuple[Array, Array]:
 
 
 def _grid(a: float, b: float, spacing: float) -> Array:
-    return np.linspace(a, b, max(2, math.ceil((b - a) / spacing) + 1))
+    """Midpoints of equal steps ≤ `spacing` across [a, b]: a face's samples stay half a step inside its edges, so
+    a voxel counts as holding surface when a patch of the face lies in it, not when only an edge touches its
+    boundary (a face ending exactly on a voxel plane would otherwise add a layer of voxels no ray can end in)."""
+    n = max(1, math.ceil((b - a) / spacing))
+    return np.asarray(a + (np.arange(n, dtype=np.float64) + 0.5) * ((b - a) / n), dtype=np.float64)
 
 
 def _local_surface(part: Part, spacing: float) -> Array:

@@ -4,7 +4,11 @@
 1. Harris corners of both rectified images are matched along epipolar lines, refined to sub-pixel and
    triangulated into a 3D cloud in the left camera frame (object corners and seabed points alike).
 2. Each requested characteristic-point set is identified in the cloud by structural coherence
-   (`perception_plugins.referencing.reference`), ambiguities settled by the prior.
+   (`perception_plugins.referencing.reference`), ambiguities settled by the prior. When it is not, and the prior
+   is tight (`guided_radius_m`; `guided: false` turns it off), corners looked for where the prior puts the set's
+   points (`perception_plugins.referencing.guided`) join the cloud and the identification runs again; the result
+   says so (`details["guided"]`): its points are less precise (up to 6 cm against 0.5–2.5 cm), and a fix that
+   fuses views prefers the others.
 3. The least-squares transform of the identified points gives T_cam_object. A result that puts the object far
    from where the prior (database pose + navigation) says is refused as implausible: outliers can fake
    consistent sets, and the database is "off by metres", not by tens of metres. So is one that tilts the
@@ -31,6 +35,7 @@ import numpy as np
 
 from mission.geometry import rotation_angle_deg, transform_points
 from mission.plugin_api import ReferencingRequest, ReferencingResult, StereoImages
+from perception_plugins.referencing.guided import guided_corners
 from perception_plugins.referencing.identification import reference
 from perception_plugins.stereo.camera import RectifiedStereo
 from perception_plugins.stereo.pipeline import stereo_cloud
@@ -48,6 +53,8 @@ class StereoReferencingPlugin:
         self.gate_deg = 25.0
         self.gate_tilt_deg = 6.0
         self.gate_depth_m = 1.0
+        self.guided = True
+        self.guided_radius_m = 1.0
 
     def configure(self, settings: Mapping[str, Any]) -> None:
         stereo = (settings.get("sensors") or {}).get("stereo") or {}
@@ -58,12 +65,28 @@ class StereoReferencingPlugin:
         self.gate_deg = float(own.get("gate_deg", self.gate_deg))
         self.gate_tilt_deg = float(own.get("gate_tilt_deg", self.gate_tilt_deg))
         self.gate_depth_m = float(own.get("gate_depth_m", self.gate_depth_m))
+        self.guided = bool(own.get("guided", self.guided))
+        self.guided_radius_m = float(own.get("guided_radius_m", self.guided_radius_m))
 
     def reset(self) -> None:
         return None
 
     def close(self) -> None:
         return None
+
+    @staticmethod
+    def _with_guided(frame: StereoImages, candidates: np.ndarray, predicted: np.ndarray, radius: float
+                     ) -> np.ndarray:
+        """The candidates plus the guided corners near the predicted points (`guided`); a guided corner within
+        3 cm of a candidate is the same corner, and the candidate (matched and refined over the whole image) is
+        kept."""
+        guided = guided_corners(frame.left, frame.right, frame.K, frame.baseline, predicted, radius).points_cam
+        if not len(guided):
+            return candidates
+        if len(candidates):
+            gap = np.min(np.linalg.norm(guided[:, None, :] - candidates[None, :, :], axis=2), axis=1)
+            guided = guided[gap > 0.03]
+        return np.vstack([candidates, guided])
 
     def process(self, frame: StereoImages, request: ReferencingRequest) -> ReferencingResult:
         height, width = frame.left.shape[:2]
@@ -83,14 +106,22 @@ class StereoReferencingPlugin:
                 ranges = predicted[:, 2]
                 tolerance *= max(1.0, (float(np.max(ranges)) / REFERENCE_RANGE_M) ** 2)
             candidates = points
+            radius = request.prior_radius
+            guided = False
             if prior is not None and request.prior_radius is not None:
                 near = np.min(np.linalg.norm(points[:, None, :] - predicted[None, :, :], axis=2), axis=1)
                 candidates = points[near <= request.prior_radius]
-            if len(candidates) < 3:
-                continue
-            found = reference(model.points, candidates, tolerance, prior)
+                guided = self.guided and radius is not None and radius <= self.guided_radius_m
+            found = reference(model.points, candidates, tolerance, prior) if len(candidates) >= 3 else None
+            with_guided = False
+            if guided and radius is not None and (found is None or not found.recognised):
+                # Guided corners only when the whole-image cloud does not hold the set: where it does, its
+                # points are the more precise (measured: single views 0.5-2.5 cm off, up to 6 cm with guided ones).
+                candidates = self._with_guided(frame, candidates, predicted, radius)
+                found = reference(model.points, candidates, tolerance, prior) if len(candidates) >= 3 else None
+                with_guided = True
             found_points = candidates
-            if not found.recognised or found.T_cloud_model is None:
+            if found is None or not found.recognised or found.T_cloud_model is None:
                 continue
             T = found.T_cloud_model
             if prior is not None:
@@ -114,7 +145,7 @@ class StereoReferencingPlugin:
             cloud_idx = [j for _, j in found.pairs]
             result = ReferencingResult(True, model.set_id, T, found.matched, found.residual_rms, found.ambiguous,
                                        len(points), {"method": found.method, "tolerance": tolerance,
-                                                     "candidates": len(candidates)},
+                                                     "candidates": len(candidates), "guided": with_guided},
                                        model.points[model_idx], found_points[cloud_idx])
             if best is None or (result.matched, -result.residual_rms) > (best.matched, -best.residual_rms):
                 best = result

@@ -9,6 +9,7 @@ synthetic box-and-cylinder scene with an exact-ray-casting scanner for tests and
 
 from planners.nbv.baseline import RecedingHorizonNbv
 from planners.nbv.candidates import candidate_views, is_safe, is_safe_view
+from planners.nbv.completeness import Completeness, surface_completeness
 from planners.nbv.derived import DerivedMaps, contour_mask
 from planners.nbv.explore import ExplorationLog, connect, explore, run_exploration, segment_safe
 from planners.nbv.grid import FREE, OCCUPIED, UNKNOWN, StateGrid
@@ -20,6 +21,7 @@ from planners.nbv.visibility import Visibility, visibility
 
 __all__ = [
     "CONTOUR",
+    "Completeness",
     "FREE",
     "OCCUPIED",
     "UNKNOWN",
@@ -52,4 +54,5 @@ __all__ = [
     "utility_terms",
     "view_utility",
     "visibility",
+    "surface_completeness",
 ]

@@ -6,7 +6,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from planners.nbv.derived import DerivedMaps
 from planners.nbv.grid import StateGrid
@@ -30,11 +30,14 @@ class MapKeeping:
     seed: int | None
     grid: StateGrid
     derived: DerivedMaps
+    returns: NDArray[np.bool_]
 
     def _init_maps(self) -> None:
         self.grid = StateGrid.over(self.voxel_map, self.lo, self.hi)
         self.derived = DerivedMaps(self.grid, self.safety_cell or max(0.5, 2.0 * self.grid.resolution))
         self.rng = np.random.default_rng(self.seed)
+        self.returns = np.zeros(self.grid.shape, dtype=bool)
+        """Voxels of the state window in which a beam has ended (a return), whatever their state now."""
 
     @property
     def safety(self) -> ClearanceGrid:
@@ -45,6 +48,8 @@ class MapKeeping:
         """Fuse one scan into the map (free along beams, occupied at returns), the dense window and the safety
         grid (clearance from occupied and unknown voxels)."""
         self.voxel_map.insert_scan(scan.origin, scan.endpoints, scan.hit, max_range=self.scanner.max_range)
+        ijk, inside = self.grid.index(scan.endpoints[scan.hit])
+        self.returns[tuple(ijk[inside].T)] = True
         box = self.grid.refresh(self.voxel_map, scan.origin, scan.endpoints)
         if box is not None:
             self.derived.update(*box)

@@ -36,3 +36,14 @@ def test_a_set_that_fails_hands_its_targets_to_another_set():
     assert "skid-east" in itinerary.failed and ("set", "skid-east") not in itinerary.queue
     assert itinerary.queue.index(("set", "module-top")) < itinerary.queue.index(("target", "valve"))
     assert itinerary.nearest_usable_set(np.array([8.0, 2.5, 0.0])) == "module-top"
+
+
+def test_re_referencing_prefers_a_detectable_set_unless_it_is_much_farther():
+    plain = Itinerary(SETS, TARGETS, "auto", np.zeros(3), seed=1, set_cost_m=8.0)
+    rated = Itinerary(SETS, TARGETS, "auto", np.zeros(3), seed=1, set_cost_m=8.0,
+                      ratings={"module-top": 0.5, "skid-east": 0.1})
+    near_skid = np.array([6.5, 2.5, -0.5])  # 2.9 m from module-top's centre, 1.1 m from skid-east's
+    assert plain.nearest_usable_set(near_skid) == "skid-east"
+    assert rated.nearest_usable_set(near_skid) == "module-top"
+    beside_skid = np.array([7.5, 2.5, -0.2])  # 0.05 m from skid-east: a fifth of the rating still wins
+    assert rated.nearest_usable_set(beside_skid) == "skid-east"

@@ -48,12 +48,20 @@ def test_the_fine_views_keep_a_compact_set_in_the_image():
         assert in_image(uv) and (cam[:, 2] < 8.0).all()
 
 
-def test_fine_views_look_down_from_the_fine_altitude_with_the_image_along_the_object():
+def test_the_fine_views_keep_a_set_spread_across_the_skid_in_the_image():
+    place = Placement(T_WORLD_OBJECT.copy(), 0.25)
+    viewer = SetViewer(SETS, FIELD, 8.0, InspectSettings())
+    for k in range(6):
+        uv, cam = pixels(viewer.fine_goal(place, "skid-west", k), SETS["skid-west"], place)
+        assert in_image(uv) and (cam[:, 2] < 8.0 - 0.5).all()
+
+
+def test_fine_views_look_down_from_where_the_set_fills_the_image_with_the_image_along_the_object():
     place = Placement(T_WORLD_OBJECT.copy(), 0.25)
     viewer = SetViewer(SETS, FIELD, 8.0, InspectSettings())
     goal = viewer.fine_goal(place, "module-top", 0)
     _, cam = pixels(goal, SETS["module-top"], place)
-    assert abs(cam[:, 2].min() - 3.6) < 1e-9  # the set's top 3.6 m below the camera
+    assert abs(cam[:, 2].min() - 4.0 / (0.9 * 1.2)) < 1e-9  # its 4 m side in 90 % of the image's 1.2 m/m width
     assert abs(math.remainder(goal.heading - (30.0 - 90.0), 360.0)) < 1e-9
     shifted = viewer.fine_goal(place, "module-top", 1)
     along = np.array([math.cos(math.radians(30)), math.sin(math.radians(30))])

@@ -36,6 +36,7 @@ from mission.agents.inspect.visit import SetVisit
 from mission.agents.known_object import database_pose
 from mission.agents.report import InspectReport, TargetOutcome
 from mission.geometry import invert, transform_points
+from mission.language.detectability import rate_object
 from mission.language.mount import DOWN_DEG
 from mission.vehicle import Command, NavState, Observation
 
@@ -67,7 +68,8 @@ class InspectAgent(Agent):
         self._survey_prior(context, obj.id, obj.size)
         nav = context.nav
         start = transform_points(invert(self.place.T_wo), np.array([[nav.north, nav.east, nav.depth]]))[0]
-        self.itinerary = Itinerary(sets, targets, p.order, start, context.mission.seed, s.set_cost_m)
+        ratings = {r.set_id: r.rating for r in rate_object(obj, stereo)}
+        self.itinerary = Itinerary(sets, targets, p.order, start, context.mission.seed, s.set_cost_m, ratings)
         plan = self.itinerary.plan
         self.report = InspectReport(
             obj.id, [list(stop) for stop in self.itinerary.queue], round(plan.length_m, 2), plan.exact,

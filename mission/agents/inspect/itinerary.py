@@ -19,10 +19,12 @@ class Itinerary:
     after its set)."""
 
     def __init__(self, sets: Mapping[str, np.ndarray], targets: Mapping[str, Target], order: str,
-                 start_object: np.ndarray, seed: int, set_cost_m: float):
+                 start_object: np.ndarray, seed: int, set_cost_m: float,
+                 ratings: Mapping[str, float] | None = None):
         from planners.ordering import inspection_order
 
         self.sets = sets
+        self.ratings = ratings or {}
         self.targets = targets
         self.seed = seed
         set_pos: dict[Hashable, Any] = {s: pts.mean(axis=0) for s, pts in sets.items()}
@@ -33,10 +35,17 @@ class Itinerary:
         self.queue: list[Stop] = self._as_listed(binding) if order == "as-listed" else list(self.plan.order)
         self.done: list[Stop] = []
 
+    def _reach(self, set_id: str, point: Any) -> float:
+        """Distance from a set to a point, divided by the set's detectability (`mission.language.detectability`):
+        a set half as detectable counts as twice as far, so a target is re-bound to, and re-referenced at, the
+        set most likely to be recognised unless it is much farther."""
+        distance = float(np.linalg.norm(self.sets[set_id].mean(axis=0) - np.asarray(point, dtype=float)))
+        return distance / max(self.ratings.get(set_id, 1.0), 1e-3)
+
     def _candidates(self, reference: str, at: Any) -> list[str]:
-        """The target's own set first, then the others by distance (for re-binding when a set fails)."""
-        others = sorted((s for s in self.sets if s != reference),
-                        key=lambda s: float(np.linalg.norm(self.sets[s].mean(axis=0) - np.asarray(at))))
+        """The target's own set first, then the others by detectability-weighted distance (`_reach`), for
+        re-binding when a set fails."""
+        others = sorted((s for s in self.sets if s != reference), key=lambda s: self._reach(s, at))
         return [reference, *others]
 
     def _as_listed(self, binding: Mapping[Hashable, Hashable]) -> list[Stop]:
@@ -62,7 +71,7 @@ class Itinerary:
         usable = [s for s in self.sets if s not in self.plan.failed]
         if not usable:
             return None
-        return min(usable, key=lambda s: float(np.linalg.norm(self.sets[s].mean(axis=0) - point)))
+        return min(usable, key=lambda s: self._reach(s, point))
 
     def replan(self, failed: str, here_object: np.ndarray, pending: Collection[str]) -> dict[str, Any]:
         """Bind the targets of a set that failed to other sets and order what is left (`pending` targets) from

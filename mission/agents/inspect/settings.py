@@ -16,7 +16,9 @@ class InspectSettings:
     # viewing a point set
     fine_altitude_m: float = 3.6  # above a set's top for the precise referencing (seed 000's experiments), at least
     search_altitude_m: float = 5.0  # above a set's top while searching: a wide view, at the least
-    view_fill: float = 0.75  # a set spans at most this share of the image's width and height in its fine view
+    view_fill: float = 0.75  # a set spans at most this share of the image's width and height while searching
+    fine_view_fill: float = 0.9  # ... and in its fine views, closer: the set's position is known to decimetres
+    # there, and the stereo depth error grows with the square of the range
     fine_steps_m: tuple[float, ...] = (0.0, 0.4, 0.8)  # successive fine views cycle through these heights above
     # the fine altitude: single-view recognition depends sharply on the range (which corners stand out)
     range_margin_m: float = 0.5  # the set's deepest point stays this far inside the stereo range

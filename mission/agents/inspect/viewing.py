@@ -46,18 +46,12 @@ class SetViewer:
         """The highest view above a set's top that keeps its deepest point inside the stereo range."""
         return self.max_range - float(np.ptp(self.sets[set_id][:, 2])) - self.settings.range_margin_m
 
-    def fit_altitude(self, set_id: str) -> float:
-        """How high above a set's top the whole set is in view (`fit_altitude`), no lower than the fine
-        altitude, and its deepest point inside the stereo range."""
+    def fit_altitude(self, set_id: str, fill: float | None = None) -> float:
+        """How high above a set's top the whole set is in view in `fill` of the image (`fit_altitude`; default
+        the search's `view_fill`), no lower than the fine altitude, and its deepest point inside the stereo range."""
         s = self.settings
-        fit = fit_altitude(self.sets[set_id], self.field, s.view_fill)
+        fit = fit_altitude(self.sets[set_id], self.field, s.view_fill if fill is None else fill)
         return min(max(s.fine_altitude_m, fit), self.range_ceiling(set_id))
-
-    def fine_altitude(self, set_id: str) -> float:
-        """Fine views are taken at the seed's 3.6 m above the set, where stereo is precise enough for the
-        photographs' 0.1 m (measured: higher views are recognised more often but fix the object a few
-        centimetres and about a degree worse, and a skid set's wrong matches then agree with one another)."""
-        return min(self.settings.fine_altitude_m, self.range_ceiling(set_id))
 
     def search_altitude(self, set_id: str) -> float:
         """Searching, a little above the fine view: a wider field for the larger position uncertainty."""
@@ -66,11 +60,12 @@ class SetViewer:
                          self.range_ceiling(set_id) - s.search_raise_m))
 
     def agreement(self, set_id: str) -> float:
-        """How closely views of a set must agree: the view agreement at the seed's 3.6 m, growing with the range
-        like the stereo depth error (σ_Z ∝ Z²), as the plug-in's own tolerance does."""
+        """How closely views of a set must agree: the view agreement at the seed's 3.6 m, growing with the fine
+        views' range like the stereo depth error (σ_Z ∝ Z²), as the plug-in's own tolerance does."""
         s = self.settings
         pts = self.sets[set_id]
-        reach = self.fine_altitude(set_id) + s.fine_steps_m[len(s.fine_steps_m) // 2] + float(np.ptp(pts[:, 2]))
+        reach = (self.fit_altitude(set_id, s.fine_view_fill) + s.fine_steps_m[len(s.fine_steps_m) // 2]
+                 + float(np.ptp(pts[:, 2])))
         return s.view_agreement_m * max(1.0, (reach / s.fine_altitude_m) ** 2)
 
     @staticmethod
@@ -96,14 +91,18 @@ class SetViewer:
         return self.camera_goal(place, camera, heading)
 
     def fine_goal(self, place: Placement, set_id: str, k: int) -> Goal:
-        """The `k`-th fine view over a set: its height cycles through the fine steps, and it moves the fine shift
-        back and forth along the object's x-axis (fresh image noise and corners each time)."""
+        """The `k`-th fine view over a set: from where the whole set is in view (`fit_altitude` with the fine
+        views' fill, the image's long
+        side along the set's longer axis: a skid set spans the skid's 5 m width, and seen at 3.6 m with the image
+        across it, two of its five points were out of every fine view), its height cycling through the fine steps,
+        moving the fine shift back and forth along the object's x-axis (fresh image noise and corners each time)."""
         s = self.settings
         shift = s.fine_shift_m * (1 if k % 2 else -1) if k else 0.0
         x_axis = place.T_wo[:3, 0]
-        altitude = min(self.fine_altitude(set_id) + s.fine_steps_m[k % len(s.fine_steps_m)],
+        altitude = min(self.fit_altitude(set_id, s.fine_view_fill) + s.fine_steps_m[k % len(s.fine_steps_m)],
                        self.range_ceiling(set_id))
-        return self.over_set(place, set_id, altitude, (shift * float(x_axis[0]), shift * float(x_axis[1])))
+        return self.over_set(place, set_id, altitude, (shift * float(x_axis[0]), shift * float(x_axis[1])),
+                             along_set=True)
 
     def search_goals(self, place: Placement, pattern: str) -> list[Goal]:
         """The whole pattern around the most distinctive set first, then around the next, every other position a

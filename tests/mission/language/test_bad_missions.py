@@ -116,7 +116,7 @@ def test_python_m_mission_validate() -> None:
                          capture_output=True, text=True, timeout=120)
     assert "Traceback" not in run.stderr
     assert run.returncode == 0, run.stdout
-    assert run.stdout.splitlines() == [f"{ref}: ok"]
+    assert [line for line in run.stdout.splitlines() if ": note: " not in line] == [f"{ref}: ok"]
 
 
 @pytest.mark.parametrize("name", ["01_yaml_unclosed_bracket.yaml", "05_empty_document.yaml",
