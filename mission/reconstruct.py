@@ -15,8 +15,10 @@ Outputs in the output folder (default RUN/models/ID/reconstruction): `mesh.ply` 
 with grey vertex colours, through trimesh), `points.ply` (the range maps' points, every 4th pixel, in the world
 frame), `report.json` (frames, timings, mesh size, the seabed plane and the object's extent above it) and
 `mesh.png` (a shaded picture of the mesh), and `object.yaml`: an `objects:` entry for a mission's database
-(`database_entry`: pose, size and characteristic-point sets proposed from the mesh; no `model:`, which the
-language reserves for multi-view model files).
+(`database_entry`: pose, size and characteristic-point sets proposed from the mesh, the targets the designer
+names, converted to the object frame, and `mesh: mesh.ply`, the mesh beside it. The entry names its mesh with
+`mesh:`, not `model:`: a database object's `model:` is a multi-view model file that the referencing plug-ins load
+as such (`mission.plugin_settings`), and a mesh is not one).
 """
 
 from __future__ import annotations
@@ -119,10 +121,42 @@ def seabed_plane(points: Array, tolerance: float = 0.05, rounds: int = 3) -> Arr
     return np.asarray(plane)
 
 
-def database_entry(object_id: str, vertices: Array, plane: Array) -> dict[str, Any] | None:
+@dataclass(frozen=True)
+class NamedTarget:
+    """A target the designer names for the entry: `at` in the mission's local NED frame (world), photographed
+    from `standoff` metres."""
+
+    name: str
+    at: tuple[float, float, float]
+    standoff: float = 2.0
+
+
+def parse_target(text: str) -> NamedTarget:
+    """`NAME=N,E,D[:standoff]` (world NED, metres) as `auv reconstruct --target` takes it.
+
+    >>> parse_target("valve=215.5,110.2,54.1:2.5")
+    NamedTarget(name='valve', at=(215.5, 110.2, 54.1), standoff=2.5)
+    """
+    name, sep, rest = text.partition("=")
+    coords, _, standoff = rest.partition(":")
+    try:
+        values = tuple(float(v) for v in coords.split(","))
+        distance = float(standoff) if standoff else 2.0
+    except ValueError:
+        values, distance = (), 0.0
+    if not sep or not name.strip() or len(values) != 3 or not distance > 0:
+        raise ReconstructionError(f"target '{text}': expected NAME=NORTH,EAST,DEPTH[:STANDOFF] (metres, world "
+                                  "NED; standoff > 0, default 2)")
+    return NamedTarget(name.strip(), (values[0], values[1], values[2]), distance)
+
+
+def database_entry(object_id: str, vertices: Array, plane: Array, targets: tuple[NamedTarget, ...] = (),
+                   mesh_file: str | None = None) -> dict[str, Any] | None:
     """An `objects:` entry for the mission language: the object frame has its origin on the seabed plane at the
     north-west-most corner of the object's footprint box, axes north, east, down (heading 0); `size` is the box;
-    the characteristic-point sets are `propose_point_sets`' (a symmetric set is named so in `description`)."""
+    the characteristic-point sets are `propose_point_sets'` (a symmetric set is named so in `description`);
+    `targets` become the entry's targets in that frame, each referenced to the set whose centroid is nearest;
+    `mesh_file` is written as the entry's `mesh:`."""
     from perception_plugins.reconstruction.keypoints import propose_point_sets
 
     height = plane[0] * vertices[:, 0] + plane[1] * vertices[:, 1] + plane[2] - vertices[:, 2]
@@ -139,8 +173,16 @@ def database_entry(object_id: str, vertices: Array, plane: Array) -> dict[str, A
         sets.append({"id": name, "points": [[round(float(c), 3) for c in p - origin] for p in proposal.points]})
         if proposal.symmetric:
             symmetric.append(name)
+    if targets and not sets:
+        raise ReconstructionError(f"'{object_id}': no characteristic-point set was found to reference the targets to")
+    entry_targets = []
+    for target in targets:
+        at = np.asarray(target.at) - origin
+        nearest = min(sets, key=lambda s: float(np.linalg.norm(np.mean(s["points"], axis=0) - at)))
+        entry_targets.append({"id": target.name, "at": [round(float(c), 3) for c in at],
+                              "reference": nearest["id"], "standoff": target.standoff})
     size = [round(float(v), 2) for v in (*(hi - lo), float(height.max()))]
-    return {
+    entry: dict[str, Any] = {
         "id": object_id,
         "description": "reconstructed by `auv reconstruct`" + (
             f"; symmetric sets (the prior heading must choose): {', '.join(symmetric)}" if symmetric else ""),
@@ -149,11 +191,17 @@ def database_entry(object_id: str, vertices: Array, plane: Array) -> dict[str, A
         "size": [max(v, 0.01) for v in size],
         "characteristic_points": sets,
     }
+    if entry_targets:
+        entry["targets"] = entry_targets
+    if mesh_file is not None:
+        entry["mesh"] = mesh_file
+    return entry
 
 
 def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
-                    voxel_m: float = 0.02) -> dict[str, Any]:
-    """Reconstruct the object from the run's recording and write the outputs; returns the report."""
+                    voxel_m: float = 0.02, targets: tuple[NamedTarget, ...] = ()) -> dict[str, Any]:
+    """Reconstruct the object from the run's recording and write the outputs; returns the report. `targets`
+    (world NED) go into the database entry in its object frame."""
     import cv2
 
     from mission.reconstruct_io import render_picture, write_mesh, write_points
@@ -198,7 +246,7 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     else:
         point_grey = np.concatenate(greys)
     write_mesh(mesh, out)
-    entry = database_entry(object_id, mesh.vertices, plane) if len(above) else None
+    entry = database_entry(object_id, mesh.vertices, plane, targets, "mesh.ply") if len(above) else None
     if entry is not None:
         import yaml
 
@@ -225,5 +273,5 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     return report
 
 
-__all__ = ["Recording", "ReconstructionError", "database_entry", "find_recording", "read_recording", "reconstruct_run",
+__all__ = ["NamedTarget", "Recording", "ReconstructionError", "database_entry", "parse_target", "find_recording", "read_recording", "reconstruct_run",
            "seabed_plane"]

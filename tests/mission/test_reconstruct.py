@@ -86,6 +86,8 @@ def test_the_database_entry_is_accepted_by_the_mission_language(run_dir: Path, t
     assert all(4 <= len(s["points"]) <= 6 for s in entry["characteristic_points"])
     assert entry["pose"]["depth"] == pytest.approx(SEABED_DEPTH, abs=0.1)
     assert entry["size"][2] == pytest.approx(3.0, abs=0.25)
+    assert entry["mesh"] == "mesh.ply"  # beside object.yaml; a mission names it relative to itself
+    entry["mesh"] = str(run_dir / "out" / "mesh.ply")
     mission = {"name": "uses-reconstruction", "objects": [entry],
                "sensors": {"usbl": {"sigma": 1.5}},
                "route": [{"id": "go", "transit": {"to": {"north": 0, "east": 0}, "depth": 20}}]}
@@ -93,5 +95,6 @@ def test_the_database_entry_is_accepted_by_the_mission_language(run_dir: Path, t
     path.write_text(yaml.safe_dump(mission, sort_keys=False))
     loaded, diagnostics = validate_mission_file(path)
     assert [d for d in diagnostics if not d.warning] == [] and loaded is not None
+    assert loaded.objects[0].mesh == str(run_dir / "out" / "mesh.ply")
     assert loaded.objects[0].characteristic_points[0].points[0] == pytest.approx(
         entry["characteristic_points"][0]["points"][0])
