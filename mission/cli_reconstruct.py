@@ -1,5 +1,5 @@
-"""`auv reconstruct RUN_DIR --object ID [--out DIR] [--target NAME=N,E,D[:STANDOFF]]...`: a mesh of an explored object from the run folder's stereo
-recording (`mission.reconstruct`)."""
+"""`auv reconstruct RUN_DIR --object ID [--element ID] [--out DIR] [--target NAME=N,E,D[:STANDOFF]]...`: a mesh of
+an explored object from the run folder's stereo recording, and its database entry (`mission.reconstruct`)."""
 
 from __future__ import annotations
 
@@ -18,7 +18,8 @@ def _reconstruct(args: argparse.Namespace) -> int:
                                     "pip install 'auv-mission[recon]'")
     require("matplotlib", "the mesh picture (`auv reconstruct`)")
     targets = tuple(parse_target(t) for t in args.target)
-    report = reconstruct_run(Path(args.run), args.object, Path(args.out) if args.out else None, args.voxel, targets)
+    report = reconstruct_run(Path(args.run), args.object, Path(args.out) if args.out else None, args.voxel, targets,
+                             args.element)
     extent = report["object_extent"]
     print(f"{report['object']}: {report['frames']} frame(s) from {report['recording']} ({report['pose_file']}), "
           f"{report['triangles']:,} triangles, {report['area_m2']:.1f} m²"
@@ -31,6 +32,8 @@ def add_reconstruct_command(sub: Any) -> None:
     p = sub.add_parser("reconstruct", help="a 3D mesh of an explored object from a run's stereo recording")
     p.add_argument("run", help="run folder (its stereo recording: see `mission.reconstruct`)")
     p.add_argument("--object", required=True, help="id of the explored object")
+    p.add_argument("--element", help="read the recording of this route element (RUN/stereo/ELEMENT: an explore "
+                                     "element's `model` action) instead of looking it up by the object's id")
     p.add_argument("--out", help="output folder (default RUN/models/OBJECT/reconstruction)")
     p.add_argument("--voxel", type=float, default=0.02, help="voxel size in metres (default 0.02)")
     p.add_argument("--target", action="append", default=[], metavar="NAME=N,E,D[:STANDOFF]",

@@ -8,8 +8,9 @@ frame; camera axes per OpenCV). The pose must be the *estimated* one: `nav.txt` 
 simulator's recorder writes the truth to `poses.txt` and navigation's estimate to `nav.txt`), else `poses.txt`.
 The folder is looked for, in order, at RUN/models/ID, RUN/model/ID, RUN/stereo/ID, RUN/ID and RUN/stereo.
 
-The seabed is the plane most mesh vertices lie on (RANSAC); vertices more than `OBJECT_HEIGHT_M` above it are the
-object, and the outputs keep the object with `SEABED_MARGIN_M` of seabed around its footprint.
+The seabed is first the plane most mesh vertices lie on; the object is the connected structure rising most above it
+(`isolate_object`), and the seabed plane is refitted on a ring around it. Vertices more than `OBJECT_HEIGHT_M`
+above that plane are the object, and the outputs keep it with `SEABED_MARGIN_M` of seabed around its footprint.
 
 Outputs in the output folder (default RUN/models/ID/reconstruction): `mesh.ply` and `mesh.glb` (the cleaned mesh
 with grey vertex colours, through trimesh), `points.ply` (the range maps' points, every 4th pixel, in the world
@@ -60,8 +61,15 @@ class Recording:
     right: tuple[Path, ...]
 
 
-def find_recording(run_dir: Path, object_id: str) -> Path:
-    """The first folder of `SEARCH` under the run folder that holds a `calib.txt`."""
+def find_recording(run_dir: Path, object_id: str, element: str | None = None) -> Path:
+    """The first folder of `SEARCH` under the run folder that holds a `calib.txt`; with `element`, the recording of
+    that route element (RUN/stereo/ELEMENT: an explore element's `model` action names it by the element, not the
+    object)."""
+    if element is not None:
+        folder = run_dir / "stereo" / element
+        if (folder / "calib.txt").is_file():
+            return folder
+        raise ReconstructionError(f"{run_dir}: no stereo recording of element '{element}' (looked in stereo/{element})")
     for pattern in SEARCH:
         folder = run_dir / pattern.format(id=object_id)
         if (folder / "calib.txt").is_file():
@@ -121,6 +129,35 @@ def seabed_plane(points: Array, tolerance: float = 0.05, rounds: int = 3) -> Arr
     return np.asarray(plane)
 
 
+def isolate_object(vertices: Array, plane: Array, cell: float = 0.1, rise_m: float = 0.3,
+                   ring_m: float = 3.0) -> tuple[Array, Array, Array] | None:
+    """The structure on the seabed: the north-east box (lo, hi) of the connected cells rising more than `rise_m`
+    above `plane` that hold the most volume, and the seabed plane refitted on the vertices in a `ring_m` ring
+    around that box (a plane fitted to a whole recording tilts with a sloping, rough seabed); None when nothing
+    rises that high."""
+    import cv2
+
+    height = plane[0] * vertices[:, 0] + plane[1] * vertices[:, 1] + plane[2] - vertices[:, 2]
+    origin = vertices[:, :2].min(axis=0)
+    ij = np.floor((vertices[:, :2] - origin) / cell).astype(np.int64)
+    grid = np.zeros(tuple(int(s) for s in ij.max(axis=0) + 1))
+    np.maximum.at(grid, (ij[:, 0], ij[:, 1]), np.maximum(height, 0.0))
+    mask = cv2.morphologyEx((grid > rise_m).astype(np.uint8), cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
+    count, labels = cv2.connectedComponents(mask, connectivity=8)
+    if count <= 1:
+        return None
+    volume = np.bincount(labels.ravel(), weights=grid.ravel(), minlength=count)
+    volume[0] = 0.0
+    cells = np.argwhere(labels == int(np.argmax(volume)))
+    lo, hi = origin + cells.min(axis=0) * cell, origin + (cells.max(axis=0) + 1) * cell
+
+    def within(margin: float) -> NDArray[np.bool_]:
+        return np.asarray(np.all((vertices[:, :2] >= lo - margin) & (vertices[:, :2] <= hi + margin), axis=1), dtype=bool)
+
+    ring = within(ring_m) & ~within(0.3)
+    return lo, hi, (seabed_plane(vertices[ring]) if ring.sum() >= 100 else plane)
+
+
 @dataclass(frozen=True)
 class NamedTarget:
     """A target the designer names for the entry: `at` in the mission's local NED frame (world), photographed
@@ -175,12 +212,13 @@ def database_entry(object_id: str, vertices: Array, plane: Array, targets: tuple
             symmetric.append(name)
     if targets and not sets:
         raise ReconstructionError(f"'{object_id}': no characteristic-point set was found to reference the targets to")
+    centroids = [proposal.points.mean(axis=0) - origin for proposal in proposals]
     entry_targets = []
     for target in targets:
         at = np.asarray(target.at) - origin
-        nearest = min(sets, key=lambda s: float(np.linalg.norm(np.mean(s["points"], axis=0) - at)))
+        nearest = int(np.argmin([np.linalg.norm(c - at) for c in centroids]))
         entry_targets.append({"id": target.name, "at": [round(float(c), 3) for c in at],
-                              "reference": nearest["id"], "standoff": target.standoff})
+                              "reference": sets[nearest]["id"], "standoff": target.standoff})
     size = [round(float(v), 2) for v in (*(hi - lo), float(height.max()))]
     entry: dict[str, Any] = {
         "id": object_id,
@@ -199,15 +237,16 @@ def database_entry(object_id: str, vertices: Array, plane: Array, targets: tuple
 
 
 def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
-                    voxel_m: float = 0.02, targets: tuple[NamedTarget, ...] = ()) -> dict[str, Any]:
-    """Reconstruct the object from the run's recording and write the outputs; returns the report. `targets`
-    (world NED) go into the database entry in its object frame."""
+                    voxel_m: float = 0.02, targets: tuple[NamedTarget, ...] = (), element: str | None = None
+                    ) -> dict[str, Any]:
+    """Reconstruct the object from the run's recording (`find_recording`) and write the outputs; returns the
+    report. `targets` (world NED) go into the database entry in its object frame."""
     import cv2
 
     from mission.reconstruct_io import render_picture, write_mesh, write_points
     from perception_plugins.reconstruction import RangeSettings, ReconstructionSettings, fuse_views, points_from_range
 
-    recording = read_recording(find_recording(run_dir, object_id))
+    recording = read_recording(find_recording(run_dir, object_id, element))
     out = out_dir or run_dir / "models" / object_id / "reconstruction"
     out.mkdir(parents=True, exist_ok=True)
     maps: list[Any] = []
@@ -235,16 +274,17 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     points = np.vstack(clouds)
     plane = seabed_plane(result.mesh.vertices)
     mesh = result.mesh
-    height = plane[0] * mesh.vertices[:, 0] + plane[1] * mesh.vertices[:, 1] + plane[2] - mesh.vertices[:, 2]
-    above = mesh.vertices[height > OBJECT_HEIGHT_M]
-    if len(above):  # keep the object and the seabed around its foot, not the seabed to the edge of the views
-        lo, hi = above[:, :2].min(axis=0) - SEABED_MARGIN_M, above[:, :2].max(axis=0) + SEABED_MARGIN_M
+    region = isolate_object(mesh.vertices, plane)
+    point_grey = np.concatenate(greys)
+    if region is not None:  # keep the object and the seabed around its foot, not the seabed to the edge of the views
+        lo, hi, plane = region
+        lo, hi = lo - SEABED_MARGIN_M, hi + SEABED_MARGIN_M
         inside = np.all((mesh.vertices[:, :2] >= lo) & (mesh.vertices[:, :2] <= hi), axis=1)
         mesh = mesh.subset(inside[mesh.faces].all(axis=1))
         keep = np.all((points[:, :2] >= lo) & (points[:, :2] <= hi), axis=1)
-        points, point_grey = points[keep], np.concatenate(greys)[keep]
-    else:
-        point_grey = np.concatenate(greys)
+        points, point_grey = points[keep], point_grey[keep]
+    height = plane[0] * mesh.vertices[:, 0] + plane[1] * mesh.vertices[:, 1] + plane[2] - mesh.vertices[:, 2]
+    above = mesh.vertices[height > OBJECT_HEIGHT_M]
     write_mesh(mesh, out)
     entry = database_entry(object_id, mesh.vertices, plane, targets, "mesh.ply") if len(above) else None
     if entry is not None:
@@ -273,5 +313,5 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     return report
 
 
-__all__ = ["NamedTarget", "Recording", "ReconstructionError", "database_entry", "parse_target", "find_recording", "read_recording", "reconstruct_run",
-           "seabed_plane"]
+__all__ = ["NamedTarget", "Recording", "ReconstructionError", "database_entry", "find_recording", "parse_target",
+           "isolate_object", "read_recording", "reconstruct_run", "seabed_plane"]

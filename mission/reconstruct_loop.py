@@ -54,7 +54,8 @@ def photo_errors(run_dir: Path, element_id: str, entry: Mapping[str, Any],
         if name not in targets_world or name not in at_object:
             continue
         k = int(np.argmin(np.abs(times - float(photo["time"]))))
-        T_world_cam = camera_pose(*poses[k], baseline=baseline)
+        north, east, down, heading = (float(v) for v in poses[k])
+        T_world_cam = camera_pose(north, east, down, heading, baseline=baseline)
         offset = R_world_object @ (np.asarray(photo["viewpoint_object"], dtype=float) - at_object[name])
         target = np.asarray(targets_world[name], dtype=float)
         error = float(np.linalg.norm(T_world_cam[:3, 3] - (target + offset)))

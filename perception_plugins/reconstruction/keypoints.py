@@ -64,6 +64,27 @@ def step_image(grid: Array, step_m: float, min_height: float) -> Array:
     return np.asarray(np.where(mask > 0, np.log1p(np.maximum(grid, 0.0) / step_m), 0.0), dtype=float)
 
 
+def convex_share(grid: Array, cells: NDArray[np.int64], radius_cells: int) -> Array:
+    """For each cell, the share of the disc of `radius_cells` around it that lies on the high side of the step
+    there (heights above the middle of the disc's lowest and highest): about 1/4 at a convex right-angled corner,
+    1/2 on a straight edge or a wide curve (a column's rim), 3/4 in a concave corner.
+
+    >>> grid = np.zeros((40, 40)); grid[10:, 10:] = 1.0
+    >>> convex_share(grid, np.array([[10, 10], [25, 10]]), 6).round(2).tolist()
+    [0.31, 0.56]
+    """
+    r = radius_cells
+    dy, dx = np.mgrid[-r:r + 1, -r:r + 1]
+    disc = (dy * dy + dx * dx) <= r * r
+    padded = np.pad(grid, r, mode="edge")
+    shares = []
+    for row, col in cells:
+        window = padded[row:row + 2 * r + 1, col:col + 2 * r + 1][disc]
+        middle = 0.5 * (window.min() + window.max())
+        shares.append(float(np.mean(window > middle)))
+    return np.asarray(shares, dtype=float)
+
+
 def _group(corners: Array, set_size: int, sets: int, tolerance: float) -> list[PointSetProposal]:
     """Disjoint sets of `set_size` corners, each the strongest remaining corner and its nearest neighbours (so a
     set fits one view); when those are symmetric, the farther candidates are tried in turn for the last place."""
@@ -105,10 +126,11 @@ def is_symmetric(points_2d: Array, tolerance: float) -> bool:
 
 def propose_point_sets(vertices: Array, plane: Array, set_size: int = 5, sets: int = 2, cell: float = 0.05,
                        min_height: float = 0.1, tolerance: float = 0.1, step_m: float = 0.1,
-                       separation_m: float = 0.3) -> list[PointSetProposal]:
+                       separation_m: float = 0.3, max_convex_share: float = 0.4) -> list[PointSetProposal]:
     """Sets of `set_size` object corners (world frame) from the mesh's vertices: Harris corners of the height map's
     `step_image`, at least `separation_m` apart, each placed on the top of its step (the highest cell within
-    `separation_m` / 2: the corner a camera from above sees is the top face's), grouped by `_group`."""
+    `separation_m` / 2: the corner a camera from above sees is the top face's), convex (`convex_share` at most
+    `max_convex_share`), grouped by `_group`."""
     if not 4 <= set_size <= 6:
         raise ValueError(f"a characteristic-point set has 4 to 6 points, not {set_size}")
     grid, origin = height_map(vertices, plane, cell)
@@ -116,17 +138,20 @@ def propose_point_sets(vertices: Array, plane: Array, set_size: int = 5, sets: i
     steps = step_image(grid, step_m, min_height)
     cells = harris_corners(steps, set_size * sets * 3, min_separation_cells=separation,
                            block_cells=max(3, separation | 1), relative=0.05)
-    reach = max(1, separation // 2)
-    top = cv2.dilate(grid.astype(np.float32), np.ones((2 * reach + 1, 2 * reach + 1), np.uint8))
-    heights = np.asarray(top, dtype=float)[cells[:, 0], cells[:, 1]] if len(cells) else np.zeros(0)
-    cells, heights = cells[heights >= min_height], heights[heights >= min_height]
     if len(cells) == 0:
         return []
     # Harris's window shifts its peaks off the corner; the sub-cell corner is where the outline's edges meet.
     xy = np.ascontiguousarray(cells[:, ::-1].astype(np.float32).reshape(-1, 1, 2))
     criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.01)
-    xy = cv2.cornerSubPix(steps.astype(np.float32), xy, (reach, reach), (-1, -1), criteria)
-    north_east = origin + (xy.reshape(-1, 2)[:, ::-1].astype(float) + 0.5) * cell
+    reach = max(1, separation // 2)
+    rc = cv2.cornerSubPix(steps.astype(np.float32), xy, (reach, reach), (-1, -1), criteria).reshape(-1, 2)[:, ::-1]
+    at = np.clip(np.round(rc).astype(np.int64), 0, np.array(grid.shape) - 1)
+    top = np.asarray(cv2.dilate(grid.astype(np.float32), np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)), float)
+    heights = top[at[:, 0], at[:, 1]]
+    # A corner a camera finds from above is a convex one: a straight edge's bump or a column's rim is not.
+    keep = (heights >= min_height) & (convex_share(grid, at, separation) <= max_convex_share)
+    north_east = origin + (rc[keep].astype(float) + 0.5) * cell
+    heights = heights[keep]
     depth = plane[0] * north_east[:, 0] + plane[1] * north_east[:, 1] + plane[2] - heights
     return _group(np.column_stack([north_east, depth]), set_size, sets, tolerance)
 

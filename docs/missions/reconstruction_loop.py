@@ -1,0 +1,95 @@
+"""Issue 22's loop end to end, measured (README, "3D reconstruction of explored objects"):
+
+1. `docs/missions/sps_explore_model.yaml`: a survey finds wellhead-x (the database lacks it), the reference
+   mission's explore element scans it with `actions: [map, model]` and records the stereo pairs (RUN/explore);
+2. `auv reconstruct RUN/explore --object wellhead-x --element scan-unknown --target ...`: the mesh and the database
+   entry, with three targets named by their true world positions (RUN/explore/recon/object.yaml);
+3. a follow-up mission that knows wellhead-x only from that entry (`follow_up_mission`: transit, inspect all its
+   targets, home; no truth) is simulated for each seed (RUN/inspect-seed-N), and each photograph's true camera
+   is compared with the viewpoint placed on its target's true position (`mission.reconstruct_loop`).
+
+    .venv/bin/python docs/missions/reconstruction_loop.py RUN_DIR [SEEDS]     # SEEDS like 1,2,3 (default)
+
+Steps whose outputs exist are not run again (delete the folder to redo one).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from mission.language.loader import load_mission
+from mission.reconstruct import parse_target, reconstruct_run
+from mission.reconstruct_loop import photo_errors, recognitions
+from mission.sim.run import simulate
+
+ROOT = Path(__file__).resolve().parents[2]
+TARGETS = {  # true world positions (local NED, m) on worlds/sps_field.yaml's wellhead-x, standoff 3 m
+    "tree-cap": (215.000, 110.000, 56.000),  # the top of the tree body
+    "flowline-end": (216.597, 110.581, 56.600),  # the top of the flowline stub's end
+    "frame-corner": (217.307, 108.924, 58.600),  # the base frame's top, 0.2 m in from a corner
+}
+STANDOFF_M = 3.0
+
+
+def follow_up_mission(entry: dict[str, Any], mesh: Path, seed: int) -> dict[str, Any]:
+    """The second mission: wellhead-x from the entry only, approached by USBL, its targets photographed."""
+    template = yaml.safe_load((ROOT / "docs" / "missions" / "sps_explore_model.yaml").read_text(encoding="utf-8"))
+    north, east = entry["pose"]["north"] + entry["size"][0] / 2, entry["pose"]["east"] + entry["size"][1] / 2
+    return {
+        "name": "wellhead-inspect-reconstructed",
+        "description": "Photograph wellhead-x's named targets, knowing it only from `auv reconstruct`'s entry.",
+        "origin": template["origin"], "world": str(ROOT / "worlds" / "sps_field.yaml"), "seed": seed,
+        "vehicle": template["vehicle"],
+        "sensors": {**{k: template["sensors"][k] for k in ("usbl", "dvl")},
+                    "stereo": {**template["sensors"]["stereo"], "rate_hz": 10}},
+        "plugins": {"referencing": "stereo-referencing", "odometry": "stereo-vo"},
+        "safety": {**template["safety"], "max_duration": "1h"},
+        "objects": [{**entry, "mesh": str(mesh)}],
+        "route": [
+            {"id": "approach", "transit": {"to": {"north": round(north, 2), "east": round(east, 2)}, "depth": 45,
+                                           "navigation": "usbl"}},
+            {"id": "photograph-wellhead", "inspect": {"object": entry["id"], "targets": "all", "order": "auto",
+                                                      "search": {"pattern": "expanding-square", "budget": "5min"}},
+             "actions": ["photograph"]},
+            {"id": "home", "transit": {"to": "home", "depth": 0}},
+        ],
+    }
+
+
+def main() -> None:
+    run = Path(sys.argv[1] if len(sys.argv) > 1 else "runs/reconstruction-loop")
+    seeds = [int(s) for s in (sys.argv[2] if len(sys.argv) > 2 else "1,2,3").split(",")]
+    explore, recon = run / "explore", run / "explore" / "recon"
+    if not (explore / "metrics.json").is_file():
+        simulate(load_mission(ROOT / "docs" / "missions" / "sps_explore_model.yaml"), out=explore, force=True)
+    if not (recon / "object.yaml").is_file():
+        targets = tuple(parse_target(f"{k}={n},{e},{d}:{STANDOFF_M}") for k, (n, e, d) in TARGETS.items())
+        reconstruct_run(explore, "wellhead-x", recon, targets=targets, element="scan-unknown")
+    entry = yaml.safe_load((recon / "object.yaml").read_text(encoding="utf-8"))["objects"][0]
+    summary = []
+    for seed in seeds:
+        path = run / f"inspect-seed-{seed}.yaml"
+        path.write_text(yaml.safe_dump(follow_up_mission(entry, (recon / "mesh.ply").resolve(), seed),
+                                       sort_keys=False), encoding="utf-8")
+        out = run / f"inspect-seed-{seed}"
+        if not (out / "metrics.json").is_file():
+            simulate(load_mission(path), out=out, force=True, plots=False)
+        errors = photo_errors(out, "photograph-wellhead", entry, TARGETS, 0.25)
+        metrics = json.loads((out / "metrics.json").read_text(encoding="utf-8"))
+        element = next(e for e in metrics["elements"] if e["id"] == "photograph-wellhead")
+        summary.append({"seed": seed, "completed": metrics["completed"], "status": element["status"],
+                        "photos": len(errors), "worst_error_m": max((e["error_m"] for e in errors), default=None),
+                        "errors_m": {t: max(e["error_m"] for e in errors if e["target"] == t)
+                                     for t in sorted({e["target"] for e in errors})},
+                        "recognitions": recognitions(out, "photograph-wellhead")})
+        print(json.dumps(summary[-1]))
+    (run / "loop.json").write_text(json.dumps(summary, indent=1) + "\n", encoding="utf-8")
+
+
+if __name__ == "__main__":
+    main()
