@@ -152,7 +152,8 @@ def isolate_object(vertices: Array, plane: Array, cell: float = 0.1, rise_m: flo
     lo, hi = origin + cells.min(axis=0) * cell, origin + (cells.max(axis=0) + 1) * cell
 
     def within(margin: float) -> NDArray[np.bool_]:
-        return np.asarray(np.all((vertices[:, :2] >= lo - margin) & (vertices[:, :2] <= hi + margin), axis=1), dtype=bool)
+        inside = (vertices[:, :2] >= lo - margin) & (vertices[:, :2] <= hi + margin)
+        return np.asarray(np.all(inside, axis=1), dtype=bool)
 
     ring = within(ring_m) & ~within(0.3)
     return lo, hi, (seabed_plane(vertices[ring]) if ring.sum() >= 100 else plane)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import csv
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -66,6 +66,16 @@ def photo_errors(run_dir: Path, element_id: str, entry: Mapping[str, Any],
     return out
 
 
+def mesh_offset(vertices: np.ndarray, sdf: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    """The translation that best lays the reconstructed object's vertices (world, the explore run's navigation
+    frame) on the true surface (`sdf`: signed distance to the true geometry): least squares on the distances,
+    robust (soft L1, 5 cm scale). It is the navigation error the reconstruction inherited, as one offset."""
+    from scipy.optimize import least_squares
+
+    fit = least_squares(lambda t: sdf(vertices - t), np.zeros(3), loss="soft_l1", f_scale=0.05, x_scale=0.1)
+    return np.asarray(fit.x, dtype=float)
+
+
 def recognitions(run_dir: Path, element_id: str) -> dict[str, dict[str, int]]:
     """Per characteristic-point set: the referencing attempts of the element that asked for it (`attempts`, the
     fused records left out) and the attempts that recognised it (`recognised`), from `metrics.json`."""
@@ -83,4 +93,4 @@ def recognitions(run_dir: Path, element_id: str) -> dict[str, dict[str, int]]:
     return counts
 
 
-__all__ = ["photo_errors", "recognitions"]
+__all__ = ["mesh_offset", "photo_errors", "recognitions"]
