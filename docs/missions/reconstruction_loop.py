@@ -1,9 +1,12 @@
 """Issue 22's loop end to end, measured (README, "3D reconstruction of explored objects"):
 
-1. `docs/missions/sps_explore_model.yaml`: a survey finds wellhead-x (the database lacks it), the reference
+1. `docs/missions/sps_explore_model_near.yaml`: a survey finds wellhead-x (the database lacks it), the reference
    mission's explore element scans it with `actions: [map, model]` and records the stereo pairs (RUN/explore);
-2. `auv reconstruct RUN/explore --object wellhead-x --element scan-unknown --target ...`: the mesh and the database
-   entry, with three targets named by their true world positions (RUN/explore/recon/object.yaml);
+2. `auv reconstruct RUN/explore --object wellhead-x --element scan-unknown`: the mesh, then the database entry with
+   three named targets (RUN/explore/recon/object.yaml). A designer names a target where the mesh shows it, in the
+   mesh's frame (the explore run's navigation frame); the script does so by moving each target's true position by
+   the mesh's offset from the true geometry (`mission.reconstruct_loop.mesh_offset`), the navigation error the
+   reconstruction inherited;
 3. a follow-up mission that knows wellhead-x only from that entry (`follow_up_mission`: transit, inspect all its
    targets, home; no truth) is simulated for each seed (RUN/inspect-seed-N), and each photograph's true camera
    is compared with the viewpoint placed on its target's true position (`mission.reconstruct_loop`).
@@ -17,14 +20,18 @@ from __future__ import annotations
 
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import yaml
 
+from mission.bench.reconstruction_scenes import truth_parts, truth_sdf
 from mission.language.loader import load_mission
-from mission.reconstruct import parse_target, reconstruct_run
-from mission.reconstruct_loop import photo_errors, recognitions
+from mission.language.world import World
+from mission.reconstruct import database_entry, parse_target, reconstruct_run
+from mission.reconstruct_loop import mesh_offset, photo_errors, recognitions
 from mission.sim.run import simulate
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -61,15 +68,41 @@ def follow_up_mission(entry: dict[str, Any], mesh: Path, seed: int) -> dict[str,
     }
 
 
+def true_surface() -> Callable[[np.ndarray], np.ndarray]:
+    """Signed distance to wellhead-x's true geometry in worlds/sps_field.yaml."""
+    data = yaml.safe_load((ROOT / "worlds" / "sps_field.yaml").read_text(encoding="utf-8"))
+    data["objects"] = [o for o in data["objects"] if o["id"] == "wellhead-x"]
+    parts = truth_parts(World.model_validate(data))
+    return lambda points: truth_sdf(parts, points)
+
+
+def name_targets(recon: Path) -> np.ndarray:
+    """Write the entry with the named targets where the mesh shows them; returns the mesh's offset from the truth."""
+    import trimesh
+
+    report = json.loads((recon / "report.json").read_text(encoding="utf-8"))
+    plane = np.array([report["seabed_plane"][k] for k in "abc"])
+    vertices = np.asarray(trimesh.load(recon / "mesh.ply", process=False).vertices, dtype=float)
+    height = plane[0] * vertices[:, 0] + plane[1] * vertices[:, 1] + plane[2] - vertices[:, 2]
+    offset = mesh_offset(vertices[height > 0.2], true_surface())
+    targets = tuple(parse_target(f"{k}={n + offset[0]},{e + offset[1]},{d + offset[2]}:{STANDOFF_M}")
+                    for k, (n, e, d) in TARGETS.items())
+    entry = database_entry("wellhead-x", vertices, plane, targets, "mesh.ply")
+    (recon / "object.yaml").write_text(yaml.safe_dump({"objects": [entry]}, sort_keys=False), encoding="utf-8")
+    (recon / "offset.json").write_text(json.dumps({"mesh_offset_m": offset.round(4).tolist()}) + "\n",
+                                       encoding="utf-8")
+    return offset
+
+
 def main() -> None:
     run = Path(sys.argv[1] if len(sys.argv) > 1 else "runs/reconstruction-loop")
     seeds = [int(s) for s in (sys.argv[2] if len(sys.argv) > 2 else "1,2,3").split(",")]
     explore, recon = run / "explore", run / "explore" / "recon"
     if not (explore / "metrics.json").is_file():
-        simulate(load_mission(ROOT / "docs" / "missions" / "sps_explore_model.yaml"), out=explore, force=True)
-    if not (recon / "object.yaml").is_file():
-        targets = tuple(parse_target(f"{k}={n},{e},{d}:{STANDOFF_M}") for k, (n, e, d) in TARGETS.items())
-        reconstruct_run(explore, "wellhead-x", recon, targets=targets, element="scan-unknown")
+        simulate(load_mission(ROOT / "docs" / "missions" / "sps_explore_model_near.yaml"), out=explore, force=True)
+    if not (recon / "report.json").is_file():
+        reconstruct_run(explore, "wellhead-x", recon, element="scan-unknown")
+    offset = name_targets(recon)
     entry = yaml.safe_load((recon / "object.yaml").read_text(encoding="utf-8"))["objects"][0]
     summary = []
     for seed in seeds:
@@ -82,7 +115,8 @@ def main() -> None:
         errors = photo_errors(out, "photograph-wellhead", entry, TARGETS, 0.25)
         metrics = json.loads((out / "metrics.json").read_text(encoding="utf-8"))
         element = next(e for e in metrics["elements"] if e["id"] == "photograph-wellhead")
-        summary.append({"seed": seed, "completed": metrics["completed"], "status": element["status"],
+        summary.append({"seed": seed, "mesh_offset_m": offset.round(3).tolist(), "completed": metrics["completed"],
+                        "status": element["status"],
                         "photos": len(errors), "worst_error_m": max((e["error_m"] for e in errors), default=None),
                         "errors_m": {t: max(e["error_m"] for e in errors if e["target"] == t)
                                      for t in sorted({e["target"] for e in errors})},
