@@ -111,15 +111,32 @@ def read_recording(folder: Path) -> Recording:
     return Recording(folder, K, float(baseline), poses, pose_file, left, right)
 
 
-def seabed_plane(points: Array, tolerance: float = 0.05, rounds: int = 3) -> Array:
-    """(a, b, c) of the seabed plane depth = a·north + b·east + c: least squares on the points within
-    `tolerance` of the current plane, started from the horizontal plane at the most common depth (2 cm bins;
-    the seabed is the largest surface the views see, and the object only rises above it)."""
+def seabed_plane(points: Array, tolerance: float = 0.05, rounds: int = 3, cell: float = 0.5,
+                 rise: float = 0.15) -> Array:
+    """(a, b, c) of the seabed plane depth = a·north + b·east + c. The seabed is the lowest wide surface the views
+    see (objects only rise above it, and their flat tops can outnumber any one depth of a sloping, rough seabed):
+    a plane is fitted to the median depth of each `cell`, the cells more than `rise` above it dropped and the fit
+    repeated until none is; then least squares on the points within `tolerance` of it."""
+    ij = np.floor((points[:, :2] - points[:, :2].min(axis=0)) / cell).astype(np.int64)
+    keys, inverse = np.unique(ij, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    order = np.lexsort((points[:, 2], inverse))
+    counts = np.bincount(inverse, minlength=len(keys))
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    median_depth = points[order[starts + counts // 2], 2]  # each cell's median depth: its surface, not a stray point
+    centres = points[:, :2].min(axis=0) + (keys + 0.5) * cell
+    A_cells = np.column_stack([centres, np.ones(len(keys))])
+    kept = np.ones(len(keys), dtype=bool)
+    plane = np.array([0.0, 0.0, float(np.median(median_depth))])
+    for _ in range(20):
+        if kept.sum() < 3:
+            break
+        plane = np.linalg.lstsq(A_cells[kept], median_depth[kept], rcond=None)[0]
+        now = A_cells @ plane - median_depth < rise
+        if np.array_equal(now, kept):
+            break
+        kept = now
     z = points[:, 2]
-    edges = np.arange(z.min(), z.max() + 0.04, 0.02)
-    counts, edges = np.histogram(z, bins=edges) if len(edges) > 1 else (np.ones(1), np.array([z.min(), z.max()]))
-    k = int(np.argmax(counts))
-    plane = np.array([0.0, 0.0, 0.5 * (edges[k] + edges[k + 1])])
     A = np.column_stack([points[:, 0], points[:, 1], np.ones(len(points))])
     for _ in range(rounds):
         inliers = np.abs(A @ plane - z) < tolerance
