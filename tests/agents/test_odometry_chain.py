@@ -4,6 +4,7 @@ sits, in the object's frame, where it truly is; late results applied with the es
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from doubles import ScriptedPlugin, frame_at, nav_at, scripted_host
 
 from mission.agents.inspect.odometry import OdometryChain
@@ -91,3 +92,45 @@ def test_lost_frames_and_impossible_jumps_break_the_chain():
         chain.feed(frame_at(t), nav)
     assert chain.broken and chain.lost == 4 and chain.stats.lost == 4
     assert chain.needs_rereference()
+
+
+def frozen_odometry():
+    """A plug-in that tracks confidently and reports no motion at all (what a failed tracker that keeps answering
+    looks like)."""
+    return ScriptedPlugin(lambda frame, request: OdometryResult(True, np.eye(4), tracked=300))
+
+
+def test_odometry_that_drags_the_object_beyond_what_navigation_can_drift_ends_the_chain():
+    """The vehicle moves 0.1 m a frame; odometry says it stands still. Following it would carry the object (and
+    the viewpoint the vehicle chases) along with the vehicle: the chain ends once the object would have moved
+    more than the gate allows, and the object stays within the gate of its fix."""
+    place, chain = chain_with(frozen_odometry())
+    navs = [nav_at(0.1 * k, 152.0 - 0.1 * k, 203.0, 54.0, 120.0) for k in range(40)]
+    chain.start(frame_at(0.0), navs[0])
+    broke_at = None
+    for k in range(1, 40):
+        chain.feed(frame_at(0.1 * k), navs[k])
+        if chain.broken and broke_at is None:
+            broke_at = k
+    assert chain.disagrees and broke_at is not None
+    settings = InspectSettings()
+    assert 0.1 * broke_at == pytest.approx(settings.vo_object_shift_m, abs=0.15)  # no odometry path: no allowance
+    shift = np.linalg.norm(place.T_wo[:3, 3] - T_WORLD_OBJECT[:3, 3])
+    assert settings.vo_object_shift_m - 0.15 <= shift <= settings.vo_object_shift_m
+    chain.start(frame_at(4.0), navs[-1])  # a new fix starts a chain that agrees again
+    assert not chain.broken
+
+
+def test_navigation_jumps_of_a_usbl_fix_do_not_end_a_truthful_chain():
+    """Navigation's estimate jumps 0.3 m (a USBL fix) while odometry reports the true motion: the object moves
+    with the estimate, as it must, and the chain goes on."""
+    true_navs = {round(0.1 * k, 1): nav_at(0.1 * k, 152.0 + 0.05 * k, 203.0, 54.0, 120.0) for k in range(30)}
+    place, chain = chain_with(truthful_odometry(true_navs))
+    chain.start(frame_at(0.0), true_navs[0.0])
+    for k in range(1, 30):
+        t = round(0.1 * k, 1)
+        truth = true_navs[t]
+        jump = 0.3 if k >= 10 else 0.0
+        chain.feed(frame_at(t), nav_at(t, truth.north + jump, truth.east - jump, 54.0, 120.0))
+    assert not chain.broken and chain.report.frames == 29
+    assert np.linalg.norm(place.T_wo[:3, 3] - T_WORLD_OBJECT[:3, 3]) == pytest.approx(0.3 * np.sqrt(2), abs=1e-6)

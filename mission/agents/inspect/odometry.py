@@ -52,6 +52,7 @@ class OdometryChain:
     path_m: float = 0.0
     lost: int = 0
     last_c: np.ndarray | None = None
+    disagrees: bool = False  # odometry moved the object further than navigation can drift (see `_apply`)
     stats: OdometryStats = field(default_factory=OdometryStats)
     report: OdometryReport = field(default_factory=OdometryReport)
     _chain: int = 0
@@ -68,7 +69,7 @@ class OdometryChain:
 
     @property
     def broken(self) -> bool:
-        return self.lost >= self.settings.vo_lost_frames
+        return self.lost >= self.settings.vo_lost_frames or self.disagrees
 
     def assumed_drift_m(self) -> float:
         return self.settings.vo_drift_per_m * self.path_m
@@ -82,12 +83,12 @@ class OdometryChain:
 
     def restart_budget(self) -> None:
         """Count the drift and lost frames afresh (the next re-referencing is due after as much motion again)."""
-        self.path_m, self.lost = 0.0, 0
+        self.path_m, self.lost, self.disagrees = 0.0, 0, False
 
     def start(self, frame: StereoImages, nav: NavState) -> None:
         """`frame` (taken at `nav`) is referenced: it becomes the origin of a new chain."""
         self.T_object_origin = self.place.camera_in_object(nav)
-        self.path_m, self.lost = 0.0, 0
+        self.path_m, self.lost, self.disagrees = 0.0, 0, False
         self.last_c = self.T_object_origin[:3, 3].copy()
         self._chain += 1
         if self.enabled:
@@ -128,12 +129,22 @@ class OdometryChain:
         if step > self.settings.vo_max_step_m:
             self._lost_frame()
             return
+        T_world_cam = self.place.camera_in_world(pending.nav)
+        anchored = T_world_cam[:3, 3] - self.place.T_wo[:3, :3] @ c
+        s = self.settings
+        allowed = s.vo_object_shift_m + s.vo_object_shift_per_m * (self.place.path_since_fix + step)
+        if float(np.linalg.norm(anchored - self.place.trusted[:3, 3])) > allowed:
+            # Odometry and navigation disagree about how the vehicle moved by more than navigation can drift:
+            # following odometry would drag the object (and the viewpoint the vehicle chases) along. End the
+            # chain; the agent re-references.
+            self.disagrees = True
+            self._lost_frame()
+            return
         self.lost = 0
         self.path_m += step
         self.place.path_since_fix += step
         self.last_c = c.copy()
-        T_world_cam = self.place.camera_in_world(pending.nav)
-        self.place.T_wo[:3, 3] = T_world_cam[:3, 3] - self.place.T_wo[:3, :3] @ c
+        self.place.T_wo[:3, 3] = anchored
         self.report.track.append([round(pending.call.frame_time, 3), *(round(float(x), 4) for x in c)])
         stats = self.stats
         self.report.frames, self.report.lost = stats.frames, stats.lost

@@ -127,7 +127,8 @@ class TargetVisit:
             self.chain.feed(frame, nav)
             if self.chain.enabled and self.chain.broken:
                 self.context.emit("odometry_lost", nav.time, element=self.context.element.id,
-                                  target=self.target_id, lost_frames=self.chain.lost)
+                                  target=self.target_id, lost_frames=self.chain.lost,
+                                  reason="disagrees with navigation" if self.chain.disagrees else "tracking lost")
                 self.stops.odometry_lost(self.target_id, nav)  # re-references first: the chain is broken
                 return Command.hold(nav)
         goal = self.goal()
