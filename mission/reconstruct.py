@@ -146,33 +146,44 @@ def seabed_plane(points: Array, tolerance: float = 0.05, rounds: int = 3, cell: 
     return np.asarray(plane)
 
 
-def isolate_object(vertices: Array, plane: Array, cell: float = 0.1, rise_m: float = 0.3,
+def isolate_object(vertices: Array, plane: Array, cell: float = 0.1, rise_m: float = 0.3, window_m: float = 8.0,
                    ring_m: float = 3.0) -> tuple[Array, Array, Array] | None:
     """The structure on the seabed: the north-east box (lo, hi) of the connected cells rising more than `rise_m`
-    above `plane` that hold the most volume, and the seabed plane refitted on the vertices in a `ring_m` ring
-    around that box (a plane fitted to a whole recording tilts with a sloping, rough seabed); None when nothing
-    rises that high."""
+    above the local seabed that hold the most volume, and the seabed plane refitted on the vertices in a `ring_m`
+    ring around that box; None when nothing rises that high. The local seabed is the height map's grey opening by
+    a `window_m` square (what is left once everything narrower than the window is shaved off): a rough seabed
+    bends by more than `rise_m` across a recording, so no one plane separates it from the object."""
     import cv2
 
     height = plane[0] * vertices[:, 0] + plane[1] * vertices[:, 1] + plane[2] - vertices[:, 2]
     origin = vertices[:, :2].min(axis=0)
     ij = np.floor((vertices[:, :2] - origin) / cell).astype(np.int64)
-    grid = np.zeros(tuple(int(s) for s in ij.max(axis=0) + 1))
-    np.maximum.at(grid, (ij[:, 0], ij[:, 1]), np.maximum(height, 0.0))
-    mask = cv2.morphologyEx((grid > rise_m).astype(np.uint8), cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
+    grid = np.full(tuple(int(s) for s in ij.max(axis=0) + 1), -np.inf)
+    np.maximum.at(grid, (ij[:, 0], ij[:, 1]), height)
+    seen = np.isfinite(grid)
+    grid = np.where(seen, grid, float(height.max())).astype(np.float32)  # unseen cells never make the floor
+    size = max(3, int(round(window_m / cell)) | 1)
+    seabed = cv2.dilate(cv2.erode(grid, np.ones((size, size), np.uint8)), np.ones((size, size), np.uint8))
+    rise = np.where(seen, grid - seabed, 0.0)
+    mask = cv2.morphologyEx((rise > rise_m).astype(np.uint8), cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
     count, labels = cv2.connectedComponents(mask, connectivity=8)
     if count <= 1:
         return None
-    volume = np.bincount(labels.ravel(), weights=grid.ravel(), minlength=count)
+    volume = np.bincount(labels.ravel(), weights=np.maximum(rise, 0.0).ravel(), minlength=count)
     volume[0] = 0.0
-    cells = np.argwhere(labels == int(np.argmax(volume)))
+    core = labels == int(np.argmax(volume))
+    # Grown by hysteresis over the cells rising a third as much (a low frame's edge), unless that spills out.
+    low_mask = cv2.morphologyEx((rise > rise_m / 3).astype(np.uint8), cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
+    _, low = cv2.connectedComponents(low_mask, connectivity=8)
+    grown = np.isin(low, np.unique(low[core & (low > 0)]))
+    cells = np.argwhere(grown if grown.sum() <= 2 * core.sum() else core)
     lo, hi = origin + cells.min(axis=0) * cell, origin + (cells.max(axis=0) + 1) * cell
 
     def within(margin: float) -> NDArray[np.bool_]:
         inside = (vertices[:, :2] >= lo - margin) & (vertices[:, :2] <= hi + margin)
         return np.asarray(np.all(inside, axis=1), dtype=bool)
 
-    ring = within(ring_m) & ~within(0.3)
+    ring = within(ring_m) & ~within(0.5)
     return lo, hi, (seabed_plane(vertices[ring]) if ring.sum() >= 100 else plane)
 
 

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from mission.bench.reconstruction_scenes import truth_parts, truth_sdf
+from mission.bench.reconstruction_scenes import part_sdf, truth_parts
 from mission.language.loader import load_mission
 from mission.language.world import World
 from mission.reconstruct import database_entry, parse_target, reconstruct_run
@@ -69,11 +69,11 @@ def follow_up_mission(entry: dict[str, Any], mesh: Path, seed: int) -> dict[str,
 
 
 def true_surface() -> Callable[[np.ndarray], np.ndarray]:
-    """Signed distance to wellhead-x's true geometry in worlds/sps_field.yaml."""
+    """Signed distance to wellhead-x's true parts in worlds/sps_field.yaml (the seabed left out)."""
     data = yaml.safe_load((ROOT / "worlds" / "sps_field.yaml").read_text(encoding="utf-8"))
     data["objects"] = [o for o in data["objects"] if o["id"] == "wellhead-x"]
     parts = truth_parts(World.model_validate(data))
-    return lambda points: truth_sdf(parts, points)
+    return lambda points: np.min([part_sdf(part, points) for part in parts], axis=0)
 
 
 def name_targets(recon: Path) -> np.ndarray:
