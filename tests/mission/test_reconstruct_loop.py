@@ -38,7 +38,7 @@ def _run(tmp_path: Path, camera_world: np.ndarray, heading: float) -> Path:
 
 def test_a_camera_above_the_true_target_at_the_standoff_has_no_error(tmp_path: Path) -> None:
     run = _run(tmp_path, TRUE_CAP + [0.0, 0.0, -2.5], heading=37.0)
-    [row] = photo_errors(run, "look", ENTRY, {"cap": TRUE_CAP}, 0.25)
+    [row] = photo_errors(run, "look", ENTRY, {"cap": TRUE_CAP.tolist()}, 0.25)
     assert row["error_m"] == pytest.approx(0.0, abs=1e-3)
     assert row["target_off_axis"] == pytest.approx(0.0, abs=1e-3)
 
@@ -46,7 +46,7 @@ def test_a_camera_above_the_true_target_at_the_standoff_has_no_error(tmp_path: P
 def test_a_camera_above_where_the_entry_puts_the_target_is_off_by_the_entry_s_error(tmp_path: Path) -> None:
     entry_cap = np.array([11.0, 22.0, 27.0])  # origin + at: the entry's idea of the target, 0.22 m off the truth
     run = _run(tmp_path, entry_cap + [0.0, 0.0, -2.5], heading=200.0)
-    [row] = photo_errors(run, "look", ENTRY, {"cap": TRUE_CAP}, 0.25)
+    [row] = photo_errors(run, "look", ENTRY, {"cap": TRUE_CAP.tolist()}, 0.25)
     assert row["error_m"] == pytest.approx(float(np.hypot(0.2, 0.1)), abs=1e-3)
 
 
