@@ -86,19 +86,21 @@ def convex_share(grid: Array, cells: NDArray[np.int64], radius_cells: int) -> Ar
 
 
 def _group(corners: Array, set_size: int, sets: int, tolerance: float) -> list[PointSetProposal]:
-    """Disjoint sets of `set_size` corners, each the strongest remaining corner and its nearest neighbours (so a
-    set fits one view); when those are symmetric, the farther candidates are tried in turn for the last place."""
+    """Disjoint sets of `set_size` corners (fewer, down to 4, when fewer are left), each the strongest remaining
+    corner and its nearest neighbours (so a set fits one view); when those are symmetric, the farther candidates
+    are tried in turn for the last place."""
     remaining = list(range(len(corners)))
     proposals: list[PointSetProposal] = []
-    while len(proposals) < sets and len(remaining) >= max(4, set_size):
+    while len(proposals) < sets and len(remaining) >= 4:
         seed = remaining[0]
         near = sorted(remaining, key=lambda i: float(np.linalg.norm(corners[i, :2] - corners[seed, :2])))
-        chosen = near[:set_size]
+        size = min(set_size, len(near))
+        chosen = near[:size]
         symmetric = is_symmetric(corners[chosen, :2], tolerance)
-        for alternative in near[set_size:set_size + 4]:
+        for alternative in near[size:size + 4]:
             if not symmetric:
                 break
-            trial = near[:set_size - 1] + [alternative]
+            trial = near[:size - 1] + [alternative]
             if not is_symmetric(corners[trial, :2], tolerance):
                 chosen, symmetric = trial, False
         proposals.append(PointSetProposal(corners[chosen], symmetric))
@@ -126,7 +128,7 @@ def is_symmetric(points_2d: Array, tolerance: float) -> bool:
 
 def propose_point_sets(vertices: Array, plane: Array, set_size: int = 5, sets: int = 2, cell: float = 0.05,
                        min_height: float = 0.1, tolerance: float = 0.1, step_m: float = 0.1,
-                       separation_m: float = 0.3, max_convex_share: float = 0.4) -> list[PointSetProposal]:
+                       separation_m: float = 0.3, max_convex_share: float = 0.36) -> list[PointSetProposal]:
     """Sets of `set_size` object corners (world frame) from the mesh's vertices: Harris corners of the height map's
     `step_image`, at least `separation_m` apart, each placed on the top of its step (the highest cell within
     `separation_m` / 2: the corner a camera from above sees is the top face's), convex (`convex_share` at most
