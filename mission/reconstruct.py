@@ -16,7 +16,8 @@ Outputs in the output folder (default RUN/models/ID/reconstruction): `mesh.ply` 
 with grey vertex colours, through trimesh), `points.ply` (the range maps' points, every 4th pixel, in the world
 frame), `report.json` (frames, timings, mesh size, the seabed plane and the object's extent above it) and
 `mesh.png` (a shaded picture of the mesh), and `object.yaml`: an `objects:` entry for a mission's database
-(`database_entry`: pose, size and characteristic-point sets proposed from the mesh, the targets the designer
+(`database_entry`: pose, size and characteristic-point sets (`detected_point_sets`: points the referencing
+plug-in's detector finds again and again in the close views; else corners of the mesh), the targets the designer
 names, converted to the object frame, and `mesh: mesh.ply`, the mesh beside it. The entry names its mesh with
 `mesh:`, not `model:`: a database object's `model:` is a multi-view model file that the referencing plug-ins load
 as such (`mission.plugin_settings`), and a mesh is not one).
@@ -42,6 +43,8 @@ MATCH_WIDTH_PX = 600
 """Images are matched shrunk by the whole factor that brings them nearest this width."""
 SEABED_MARGIN_M = 1.0
 """Seabed kept around the object's footprint in the outputs."""
+MAX_FEATURES = 600
+"""The stereo-referencing plug-in's feature budget (its default): the proposed sets hold what it will detect."""
 SEARCH = ("models/{id}", "model/{id}", "stereo/{id}", "{id}", "stereo")
 
 
@@ -217,10 +220,11 @@ def parse_target(text: str) -> NamedTarget:
 
 
 def database_entry(object_id: str, vertices: Array, plane: Array, targets: tuple[NamedTarget, ...] = (),
-                   mesh_file: str | None = None) -> dict[str, Any] | None:
+                   mesh_file: str | None = None, proposals: list[Any] | None = None) -> dict[str, Any] | None:
     """An `objects:` entry for the mission language: the object frame has its origin on the seabed plane at the
     north-west-most corner of the object's footprint box, axes north, east, down (heading 0); `size` is the box;
-    the characteristic-point sets are `propose_point_sets'` (a symmetric set is named so in `description`);
+    the characteristic-point sets are `proposals` (`PointSetProposal`s, world frame) or else
+    `propose_point_sets'` from the mesh (a symmetric set is named so in `description`);
     `targets` become the entry's targets in that frame, each referenced to the set whose centroid is nearest;
     `mesh_file` is written as the entry's `mesh:`."""
     from perception_plugins.reconstruction.keypoints import propose_point_sets
@@ -232,7 +236,8 @@ def database_entry(object_id: str, vertices: Array, plane: Array, targets: tuple
     lo, hi = above[:, :2].min(axis=0), above[:, :2].max(axis=0)
     depth0 = float(plane[0] * lo[0] + plane[1] * lo[1] + plane[2])
     origin = np.array([lo[0], lo[1], depth0])
-    proposals = propose_point_sets(vertices[height > -0.05], plane)
+    if not proposals:
+        proposals = propose_point_sets(vertices[height > -0.05], plane)
     sets, symmetric = [], []
     for k, proposal in enumerate(proposals):
         name = f"corners-{k + 1}"
@@ -263,6 +268,43 @@ def database_entry(object_id: str, vertices: Array, plane: Array, targets: tuple
     if mesh_file is not None:
         entry["mesh"] = mesh_file
     return entry
+
+
+def detected_point_sets(recording: Recording, plane: Array, lo: Array, hi: Array, reach_m: float = 4.0,
+                        min_height_m: float = 0.25, every: int = 2, max_range_m: float = 8.0) -> list[Any]:
+    """Sets of points the stereo-referencing plug-in's detector finds on the object (world frame), or [] when
+    fewer than 4: the views within `reach_m` (horizontally) of the box (lo, hi)'s centre, every `every`-th, through
+    the plug-in's own front end (`stereo_cloud`: Harris corners, its feature budget and range), placed at the
+    recording's poses; the points `min_height_m` above the seabed plane in the box that many views found again
+    (`stable_points`), grouped by `group_sets`."""
+    import cv2
+
+    from perception_plugins.reconstruction.keypoints import group_sets, stable_points
+    from perception_plugins.stereo import RectifiedStereo, stereo_cloud
+
+    first = cv2.imread(str(recording.left[0]), cv2.IMREAD_GRAYSCALE)
+    if first is None:
+        return []
+    geometry = RectifiedStereo.from_K(recording.K, recording.baseline, (first.shape[1], first.shape[0]))
+    centre = 0.5 * (lo + hi)
+    clouds = []
+    for k in range(0, len(recording.left), every):
+        T = recording.poses[k]
+        if np.linalg.norm(T[:2, 3] - centre) > reach_m:
+            continue
+        left = cv2.imread(str(recording.left[k]), cv2.IMREAD_GRAYSCALE)
+        right = cv2.imread(str(recording.right[k]), cv2.IMREAD_GRAYSCALE)
+        if left is None or right is None:
+            continue
+        pair = np.asarray(left, np.uint8), np.asarray(right, np.uint8)
+        points = stereo_cloud(*pair, geometry, detector="harris", max_features=MAX_FEATURES,
+                              max_range=max_range_m).points_cam
+        world = points @ T[:3, :3].T + T[:3, 3]
+        height = plane[0] * world[:, 0] + plane[1] * world[:, 1] + plane[2] - world[:, 2]
+        inside = np.all((world[:, :2] >= lo - 0.2) & (world[:, :2] <= hi + 0.2), axis=1)
+        clouds.append(world[(height > min_height_m) & inside])
+    stable = stable_points(clouds)
+    return group_sets(stable, 5, 2, 0.1) if len(stable) >= 4 else []
 
 
 def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
@@ -315,7 +357,10 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     height = plane[0] * mesh.vertices[:, 0] + plane[1] * mesh.vertices[:, 1] + plane[2] - mesh.vertices[:, 2]
     above = mesh.vertices[height > OBJECT_HEIGHT_M]
     write_mesh(mesh, out)
-    entry = database_entry(object_id, mesh.vertices, plane, targets, "mesh.ply") if len(above) else None
+    proposals = []
+    if region is not None:
+        proposals = detected_point_sets(recording, plane, region[0], region[1])
+    entry = database_entry(object_id, mesh.vertices, plane, targets, "mesh.ply", proposals) if len(above) else None
     if entry is not None:
         import yaml
 
@@ -324,6 +369,7 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     render_picture(mesh, out / "mesh.png", title=f"{object_id}: {len(mesh.faces):,} triangles")
     report: dict[str, Any] = {
         "object": object_id, "recording": str(recording.folder), "pose_file": recording.pose_file,
+        "point_sets_from": "detector" if proposals else "mesh corners",
         "frames": result.frames, "voxel_m": voxel_m, "match_scale": scale,
         "triangles": int(len(mesh.faces)), "triangles_before_cleaning": int(len(result.raw_mesh.faces)),
         "area_m2": round(float(mesh.face_areas().sum()), 3),
@@ -343,4 +389,5 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
 
 
 __all__ = ["NamedTarget", "Recording", "ReconstructionError", "database_entry", "find_recording", "parse_target",
-           "isolate_object", "read_recording", "reconstruct_run", "seabed_plane"]
+           "detected_point_sets", "isolate_object", "read_recording", "reconstruct_run",
+           "seabed_plane"]

@@ -30,7 +30,15 @@ import yaml
 from mission.bench.reconstruction_scenes import part_sdf, truth_parts
 from mission.language.loader import load_mission
 from mission.language.world import World
-from mission.reconstruct import database_entry, parse_target, reconstruct_run
+from mission.reconstruct import (
+    database_entry,
+    detected_point_sets,
+    find_recording,
+    isolate_object,
+    parse_target,
+    read_recording,
+    reconstruct_run,
+)
 from mission.reconstruct_loop import mesh_offset, photo_errors, recognitions
 from mission.sim.run import simulate
 
@@ -87,7 +95,11 @@ def name_targets(recon: Path) -> np.ndarray:
     offset = mesh_offset(vertices[height > 0.2], true_surface())
     targets = tuple(parse_target(f"{k}={n + offset[0]},{e + offset[1]},{d + offset[2]}:{STANDOFF_M}")
                     for k, (n, e, d) in TARGETS.items())
-    entry = database_entry("wellhead-x", vertices, plane, targets, "mesh.ply")
+    # The sets as `auv reconstruct` proposes them (the plug-in's detector on the close views), from the mesh written.
+    region = isolate_object(vertices, plane)
+    recording = read_recording(find_recording(recon.parent, "wellhead-x", "scan-unknown"))
+    proposals = detected_point_sets(recording, region[2], region[0], region[1]) if region is not None else []
+    entry = database_entry("wellhead-x", vertices, plane, targets, "mesh.ply", proposals)
     (recon / "object.yaml").write_text(yaml.safe_dump({"objects": [entry]}, sort_keys=False), encoding="utf-8")
     (recon / "offset.json").write_text(json.dumps({"mesh_offset_m": offset.round(4).tolist()}) + "\n",
                                        encoding="utf-8")

@@ -13,6 +13,7 @@ farther corner replaces the last one when that breaks the symmetry.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -85,7 +86,7 @@ def convex_share(grid: Array, cells: NDArray[np.int64], radius_cells: int) -> Ar
     return np.asarray(shares, dtype=float)
 
 
-def _group(corners: Array, set_size: int, sets: int, tolerance: float) -> list[PointSetProposal]:
+def group_sets(corners: Array, set_size: int, sets: int, tolerance: float) -> list[PointSetProposal]:
     """Disjoint sets of `set_size` corners (fewer, down to 4, when fewer are left), each the strongest remaining
     corner and its nearest neighbours (so a set fits one view); when those are symmetric, the farther candidates
     are tried in turn for the last place."""
@@ -106,6 +107,37 @@ def _group(corners: Array, set_size: int, sets: int, tolerance: float) -> list[P
         proposals.append(PointSetProposal(corners[chosen], symmetric))
         remaining = [i for i in remaining if i not in chosen]
     return proposals
+
+
+def stable_points(clouds: Sequence[Array], radius: float = 0.05, min_views: int = 5,
+                  separation: float = 0.3) -> Array:
+    """Points a detector finds again and again (seed 002 §3.1: characteristic points are the ones the detector
+    extracts well): of the views' points (world frame, one array a view), those with points of at least
+    `min_views` views within `radius`, most-seen first, at least `separation` apart, each the median of its
+    neighbours.
+
+    >>> rng = np.random.default_rng(0)
+    >>> views = [np.vstack([[[0, 0, 1], [2, 0, 1]] + rng.normal(0, 0.01, (2, 3)), rng.uniform(-5, 5, (3, 3))])
+    ...          for _ in range(6)]
+    >>> (np.round(stable_points(views), 1) + 0.0).tolist()
+    [[0.0, 0.0, 1.0], [2.0, 0.0, 1.0]]
+    """
+    from scipy.spatial import cKDTree
+
+    if not clouds or sum(len(c) for c in clouds) == 0:
+        return np.zeros((0, 3))
+    points = np.vstack([c for c in clouds if len(c)])
+    view = np.concatenate([np.full(len(c), k) for k, c in enumerate(clouds) if len(c)])
+    tree = cKDTree(points)
+    neighbours = tree.query_ball_point(points, radius)
+    seen = np.array([len(set(view[n].tolist())) for n in neighbours])
+    chosen: list[int] = []
+    for i in np.argsort(-seen, kind="stable"):
+        if seen[i] < min_views:
+            break
+        if all(np.linalg.norm(points[i] - points[j]) > separation for j in chosen):
+            chosen.append(int(i))
+    return np.array([np.median(points[neighbours[i]], axis=0) for i in chosen]).reshape(-1, 3)
 
 
 def is_symmetric(points_2d: Array, tolerance: float) -> bool:
@@ -132,7 +164,7 @@ def propose_point_sets(vertices: Array, plane: Array, set_size: int = 5, sets: i
     """Sets of `set_size` object corners (world frame) from the mesh's vertices: Harris corners of the height map's
     `step_image`, at least `separation_m` apart, each placed on the top of its step (the highest cell within
     `separation_m` / 2: the corner a camera from above sees is the top face's), convex (`convex_share` at most
-    `max_convex_share`), grouped by `_group`."""
+    `max_convex_share`), grouped by `group_sets`."""
     if not 4 <= set_size <= 6:
         raise ValueError(f"a characteristic-point set has 4 to 6 points, not {set_size}")
     grid, origin = height_map(vertices, plane, cell)
@@ -155,7 +187,8 @@ def propose_point_sets(vertices: Array, plane: Array, set_size: int = 5, sets: i
     north_east = origin + (rc[keep].astype(float) + 0.5) * cell
     heights = heights[keep]
     depth = plane[0] * north_east[:, 0] + plane[1] * north_east[:, 1] + plane[2] - heights
-    return _group(np.column_stack([north_east, depth]), set_size, sets, tolerance)
+    return group_sets(np.column_stack([north_east, depth]), set_size, sets, tolerance)
 
 
-__all__ = ["PointSetProposal", "harris_corners", "height_map", "is_symmetric", "propose_point_sets", "step_image"]
+__all__ = ["PointSetProposal", "group_sets", "harris_corners", "height_map", "is_symmetric", "propose_point_sets",
+           "stable_points", "step_image"]
