@@ -8,15 +8,19 @@ frame; camera axes per OpenCV). The pose must be the *estimated* one: `nav.txt` 
 simulator's recorder writes the truth to `poses.txt` and navigation's estimate to `nav.txt`), else `poses.txt`.
 The folder is looked for, in order, at RUN/models/ID, RUN/model/ID, RUN/stereo/ID, RUN/ID and RUN/stereo.
 
-The seabed is the plane most mesh vertices lie on (RANSAC); vertices more than `OBJECT_HEIGHT_M` above it are the
-object, and the outputs keep the object with `SEABED_MARGIN_M` of seabed around its footprint.
+The seabed is first the plane most mesh vertices lie on; the object is the connected structure rising most above it
+(`isolate_object`), and the seabed plane is refitted on a ring around it. Vertices more than `OBJECT_HEIGHT_M`
+above that plane are the object, and the outputs keep it with `SEABED_MARGIN_M` of seabed around its footprint.
 
 Outputs in the output folder (default RUN/models/ID/reconstruction): `mesh.ply` and `mesh.glb` (the cleaned mesh
 with grey vertex colours, through trimesh), `points.ply` (the range maps' points, every 4th pixel, in the world
 frame), `report.json` (frames, timings, mesh size, the seabed plane and the object's extent above it) and
 `mesh.png` (a shaded picture of the mesh), and `object.yaml`: an `objects:` entry for a mission's database
-(`database_entry`: pose, size and characteristic-point sets proposed from the mesh; no `model:`, which the
-language reserves for multi-view model files).
+(`database_entry`: pose, size and characteristic-point sets (`detected_point_sets`: points the referencing
+plug-in's detector finds again and again in the close views; else corners of the mesh), the targets the designer
+names, converted to the object frame, and `mesh: mesh.ply`, the mesh beside it. The entry names its mesh with
+`mesh:`, not `model:`: a database object's `model:` is a multi-view model file that the referencing plug-ins load
+as such (`mission.plugin_settings`), and a mesh is not one).
 """
 
 from __future__ import annotations
@@ -39,6 +43,8 @@ MATCH_WIDTH_PX = 600
 """Images are matched shrunk by the whole factor that brings them nearest this width."""
 SEABED_MARGIN_M = 1.0
 """Seabed kept around the object's footprint in the outputs."""
+MAX_FEATURES = 600
+"""The stereo-referencing plug-in's feature budget (its default): the proposed sets hold what it will detect."""
 SEARCH = ("models/{id}", "model/{id}", "stereo/{id}", "{id}", "stereo")
 
 
@@ -58,8 +64,15 @@ class Recording:
     right: tuple[Path, ...]
 
 
-def find_recording(run_dir: Path, object_id: str) -> Path:
-    """The first folder of `SEARCH` under the run folder that holds a `calib.txt`."""
+def find_recording(run_dir: Path, object_id: str, element: str | None = None) -> Path:
+    """The first folder of `SEARCH` under the run folder that holds a `calib.txt`; with `element`, the recording of
+    that route element (RUN/stereo/ELEMENT: an explore element's `model` action names it by the element, not the
+    object)."""
+    if element is not None:
+        folder = run_dir / "stereo" / element
+        if (folder / "calib.txt").is_file():
+            return folder
+        raise ReconstructionError(f"{run_dir}: no stereo recording of element '{element}' (looked in stereo/{element})")
     for pattern in SEARCH:
         folder = run_dir / pattern.format(id=object_id)
         if (folder / "calib.txt").is_file():
@@ -101,15 +114,32 @@ def read_recording(folder: Path) -> Recording:
     return Recording(folder, K, float(baseline), poses, pose_file, left, right)
 
 
-def seabed_plane(points: Array, tolerance: float = 0.05, rounds: int = 3) -> Array:
-    """(a, b, c) of the seabed plane depth = a·north + b·east + c: least squares on the points within
-    `tolerance` of the current plane, started from the horizontal plane at the most common depth (2 cm bins;
-    the seabed is the largest surface the views see, and the object only rises above it)."""
+def seabed_plane(points: Array, tolerance: float = 0.05, rounds: int = 3, cell: float = 0.5,
+                 rise: float = 0.15) -> Array:
+    """(a, b, c) of the seabed plane depth = a·north + b·east + c. The seabed is the lowest wide surface the views
+    see (objects only rise above it, and their flat tops can outnumber any one depth of a sloping, rough seabed):
+    a plane is fitted to the median depth of each `cell`, the cells more than `rise` above it dropped and the fit
+    repeated until none is; then least squares on the points within `tolerance` of it."""
+    ij = np.floor((points[:, :2] - points[:, :2].min(axis=0)) / cell).astype(np.int64)
+    keys, inverse = np.unique(ij, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    order = np.lexsort((points[:, 2], inverse))
+    counts = np.bincount(inverse, minlength=len(keys))
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    median_depth = points[order[starts + counts // 2], 2]  # each cell's median depth: its surface, not a stray point
+    centres = points[:, :2].min(axis=0) + (keys + 0.5) * cell
+    A_cells = np.column_stack([centres, np.ones(len(keys))])
+    kept = np.ones(len(keys), dtype=bool)
+    plane = np.array([0.0, 0.0, float(np.median(median_depth))])
+    for _ in range(20):
+        if kept.sum() < 3:
+            break
+        plane = np.linalg.lstsq(A_cells[kept], median_depth[kept], rcond=None)[0]
+        now = A_cells @ plane - median_depth < rise
+        if np.array_equal(now, kept):
+            break
+        kept = now
     z = points[:, 2]
-    edges = np.arange(z.min(), z.max() + 0.04, 0.02)
-    counts, edges = np.histogram(z, bins=edges) if len(edges) > 1 else (np.ones(1), np.array([z.min(), z.max()]))
-    k = int(np.argmax(counts))
-    plane = np.array([0.0, 0.0, 0.5 * (edges[k] + edges[k + 1])])
     A = np.column_stack([points[:, 0], points[:, 1], np.ones(len(points))])
     for _ in range(rounds):
         inliers = np.abs(A @ plane - z) < tolerance
@@ -119,10 +149,84 @@ def seabed_plane(points: Array, tolerance: float = 0.05, rounds: int = 3) -> Arr
     return np.asarray(plane)
 
 
-def database_entry(object_id: str, vertices: Array, plane: Array) -> dict[str, Any] | None:
+def isolate_object(vertices: Array, plane: Array, cell: float = 0.1, rise_m: float = 0.3, window_m: float = 8.0,
+                   ring_m: float = 3.0) -> tuple[Array, Array, Array] | None:
+    """The structure on the seabed: the north-east box (lo, hi) of the connected cells rising more than `rise_m`
+    above the local seabed that hold the most volume, and the seabed plane refitted on the vertices in a `ring_m`
+    ring around that box; None when nothing rises that high. The local seabed is the height map's grey opening by
+    a `window_m` square (what is left once everything narrower than the window is shaved off): a rough seabed
+    bends by more than `rise_m` across a recording, so no one plane separates it from the object."""
+    import cv2
+
+    height = plane[0] * vertices[:, 0] + plane[1] * vertices[:, 1] + plane[2] - vertices[:, 2]
+    origin = vertices[:, :2].min(axis=0)
+    ij = np.floor((vertices[:, :2] - origin) / cell).astype(np.int64)
+    grid = np.full(tuple(int(s) for s in ij.max(axis=0) + 1), -np.inf)
+    np.maximum.at(grid, (ij[:, 0], ij[:, 1]), height)
+    seen = np.isfinite(grid)
+    grid = np.where(seen, grid, float(height.max())).astype(np.float32)  # unseen cells never make the floor
+    size = max(3, int(round(window_m / cell)) | 1)
+    seabed = cv2.dilate(cv2.erode(grid, np.ones((size, size), np.uint8)), np.ones((size, size), np.uint8))
+    rise = np.where(seen, grid - seabed, 0.0)
+    mask = cv2.morphologyEx((rise > rise_m).astype(np.uint8), cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
+    count, labels = cv2.connectedComponents(mask, connectivity=8)
+    if count <= 1:
+        return None
+    volume = np.bincount(labels.ravel(), weights=np.maximum(rise, 0.0).ravel(), minlength=count)
+    volume[0] = 0.0
+    core = labels == int(np.argmax(volume))
+    # Grown by hysteresis over the cells rising a third as much (a low frame's edge), unless that spills out.
+    low_mask = cv2.morphologyEx((rise > rise_m / 3).astype(np.uint8), cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
+    _, low = cv2.connectedComponents(low_mask, connectivity=8)
+    grown = np.isin(low, np.unique(low[core & (low > 0)]))
+    cells = np.argwhere(grown if grown.sum() <= 2 * core.sum() else core)
+    lo, hi = origin + cells.min(axis=0) * cell, origin + (cells.max(axis=0) + 1) * cell
+
+    def within(margin: float) -> NDArray[np.bool_]:
+        inside = (vertices[:, :2] >= lo - margin) & (vertices[:, :2] <= hi + margin)
+        return np.asarray(np.all(inside, axis=1), dtype=bool)
+
+    ring = within(ring_m) & ~within(0.5)
+    return lo, hi, (seabed_plane(vertices[ring]) if ring.sum() >= 100 else plane)
+
+
+@dataclass(frozen=True)
+class NamedTarget:
+    """A target the designer names for the entry: `at` in the mission's local NED frame (world), photographed
+    from `standoff` metres."""
+
+    name: str
+    at: tuple[float, float, float]
+    standoff: float = 2.0
+
+
+def parse_target(text: str) -> NamedTarget:
+    """`NAME=N,E,D[:standoff]` (world NED, metres) as `auv reconstruct --target` takes it.
+
+    >>> parse_target("valve=215.5,110.2,54.1:2.5")
+    NamedTarget(name='valve', at=(215.5, 110.2, 54.1), standoff=2.5)
+    """
+    name, sep, rest = text.partition("=")
+    coords, _, standoff = rest.partition(":")
+    try:
+        values = tuple(float(v) for v in coords.split(","))
+        distance = float(standoff) if standoff else 2.0
+    except ValueError:
+        values, distance = (), 0.0
+    if not sep or not name.strip() or len(values) != 3 or not distance > 0:
+        raise ReconstructionError(f"target '{text}': expected NAME=NORTH,EAST,DEPTH[:STANDOFF] (metres, world "
+                                  "NED; standoff > 0, default 2)")
+    return NamedTarget(name.strip(), (values[0], values[1], values[2]), distance)
+
+
+def database_entry(object_id: str, vertices: Array, plane: Array, targets: tuple[NamedTarget, ...] = (),
+                   mesh_file: str | None = None, proposals: list[Any] | None = None) -> dict[str, Any] | None:
     """An `objects:` entry for the mission language: the object frame has its origin on the seabed plane at the
     north-west-most corner of the object's footprint box, axes north, east, down (heading 0); `size` is the box;
-    the characteristic-point sets are `propose_point_sets`' (a symmetric set is named so in `description`)."""
+    the characteristic-point sets are `proposals` (`PointSetProposal`s, world frame) or else
+    `propose_point_sets'` from the mesh (a symmetric set is named so in `description`);
+    `targets` become the entry's targets in that frame, each referenced to the set whose centroid is nearest;
+    `mesh_file` is written as the entry's `mesh:`."""
     from perception_plugins.reconstruction.keypoints import propose_point_sets
 
     height = plane[0] * vertices[:, 0] + plane[1] * vertices[:, 1] + plane[2] - vertices[:, 2]
@@ -132,15 +236,25 @@ def database_entry(object_id: str, vertices: Array, plane: Array) -> dict[str, A
     lo, hi = above[:, :2].min(axis=0), above[:, :2].max(axis=0)
     depth0 = float(plane[0] * lo[0] + plane[1] * lo[1] + plane[2])
     origin = np.array([lo[0], lo[1], depth0])
-    proposals = propose_point_sets(vertices[height > -0.05], plane)
+    if not proposals:
+        proposals = propose_point_sets(vertices[height > -0.05], plane)
     sets, symmetric = [], []
     for k, proposal in enumerate(proposals):
         name = f"corners-{k + 1}"
         sets.append({"id": name, "points": [[round(float(c), 3) for c in p - origin] for p in proposal.points]})
         if proposal.symmetric:
             symmetric.append(name)
+    if targets and not sets:
+        raise ReconstructionError(f"'{object_id}': no characteristic-point set was found to reference the targets to")
+    centroids = [proposal.points.mean(axis=0) - origin for proposal in proposals]
+    entry_targets = []
+    for target in targets:
+        at = np.asarray(target.at) - origin
+        nearest = int(np.argmin([np.linalg.norm(c - at) for c in centroids]))
+        entry_targets.append({"id": target.name, "at": [round(float(c), 3) for c in at],
+                              "reference": sets[nearest]["id"], "standoff": target.standoff})
     size = [round(float(v), 2) for v in (*(hi - lo), float(height.max()))]
-    return {
+    entry: dict[str, Any] = {
         "id": object_id,
         "description": "reconstructed by `auv reconstruct`" + (
             f"; symmetric sets (the prior heading must choose): {', '.join(symmetric)}" if symmetric else ""),
@@ -149,17 +263,61 @@ def database_entry(object_id: str, vertices: Array, plane: Array) -> dict[str, A
         "size": [max(v, 0.01) for v in size],
         "characteristic_points": sets,
     }
+    if entry_targets:
+        entry["targets"] = entry_targets
+    if mesh_file is not None:
+        entry["mesh"] = mesh_file
+    return entry
+
+
+def detected_point_sets(recording: Recording, plane: Array, lo: Array, hi: Array, reach_m: float = 4.0,
+                        min_height_m: float = 0.25, every: int = 2, max_range_m: float = 8.0) -> list[Any]:
+    """Sets of points the stereo-referencing plug-in's detector finds on the object (world frame), or [] when
+    fewer than 4: the views within `reach_m` (horizontally) of the box (lo, hi)'s centre, every `every`-th, through
+    the plug-in's own front end (`stereo_cloud`: Harris corners, its feature budget and range), placed at the
+    recording's poses; the points `min_height_m` above the seabed plane in the box that many views found again
+    (`stable_points`), grouped by `group_sets`."""
+    import cv2
+
+    from perception_plugins.reconstruction.keypoints import group_sets, stable_points
+    from perception_plugins.stereo import RectifiedStereo, stereo_cloud
+
+    first = cv2.imread(str(recording.left[0]), cv2.IMREAD_GRAYSCALE)
+    if first is None:
+        return []
+    geometry = RectifiedStereo.from_K(recording.K, recording.baseline, (first.shape[1], first.shape[0]))
+    centre = 0.5 * (lo + hi)
+    clouds = []
+    for k in range(0, len(recording.left), every):
+        T = recording.poses[k]
+        if np.linalg.norm(T[:2, 3] - centre) > reach_m:
+            continue
+        left = cv2.imread(str(recording.left[k]), cv2.IMREAD_GRAYSCALE)
+        right = cv2.imread(str(recording.right[k]), cv2.IMREAD_GRAYSCALE)
+        if left is None or right is None:
+            continue
+        pair = np.asarray(left, np.uint8), np.asarray(right, np.uint8)
+        points = stereo_cloud(*pair, geometry, detector="harris", max_features=MAX_FEATURES,
+                              max_range=max_range_m).points_cam
+        world = points @ T[:3, :3].T + T[:3, 3]
+        height = plane[0] * world[:, 0] + plane[1] * world[:, 1] + plane[2] - world[:, 2]
+        inside = np.all((world[:, :2] >= lo - 0.2) & (world[:, :2] <= hi + 0.2), axis=1)
+        clouds.append(world[(height > min_height_m) & inside])
+    stable = stable_points(clouds)
+    return group_sets(stable, 5, 2, 0.1) if len(stable) >= 4 else []
 
 
 def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
-                    voxel_m: float = 0.02) -> dict[str, Any]:
-    """Reconstruct the object from the run's recording and write the outputs; returns the report."""
+                    voxel_m: float = 0.02, targets: tuple[NamedTarget, ...] = (), element: str | None = None
+                    ) -> dict[str, Any]:
+    """Reconstruct the object from the run's recording (`find_recording`) and write the outputs; returns the
+    report. `targets` (world NED) go into the database entry in its object frame."""
     import cv2
 
     from mission.reconstruct_io import render_picture, write_mesh, write_points
     from perception_plugins.reconstruction import RangeSettings, ReconstructionSettings, fuse_views, points_from_range
 
-    recording = read_recording(find_recording(run_dir, object_id))
+    recording = read_recording(find_recording(run_dir, object_id, element))
     out = out_dir or run_dir / "models" / object_id / "reconstruction"
     out.mkdir(parents=True, exist_ok=True)
     maps: list[Any] = []
@@ -187,18 +345,22 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     points = np.vstack(clouds)
     plane = seabed_plane(result.mesh.vertices)
     mesh = result.mesh
-    height = plane[0] * mesh.vertices[:, 0] + plane[1] * mesh.vertices[:, 1] + plane[2] - mesh.vertices[:, 2]
-    above = mesh.vertices[height > OBJECT_HEIGHT_M]
-    if len(above):  # keep the object and the seabed around its foot, not the seabed to the edge of the views
-        lo, hi = above[:, :2].min(axis=0) - SEABED_MARGIN_M, above[:, :2].max(axis=0) + SEABED_MARGIN_M
+    region = isolate_object(mesh.vertices, plane)
+    point_grey = np.concatenate(greys)
+    if region is not None:  # keep the object and the seabed around its foot, not the seabed to the edge of the views
+        lo, hi, plane = region
+        lo, hi = lo - SEABED_MARGIN_M, hi + SEABED_MARGIN_M
         inside = np.all((mesh.vertices[:, :2] >= lo) & (mesh.vertices[:, :2] <= hi), axis=1)
         mesh = mesh.subset(inside[mesh.faces].all(axis=1))
         keep = np.all((points[:, :2] >= lo) & (points[:, :2] <= hi), axis=1)
-        points, point_grey = points[keep], np.concatenate(greys)[keep]
-    else:
-        point_grey = np.concatenate(greys)
+        points, point_grey = points[keep], point_grey[keep]
+    height = plane[0] * mesh.vertices[:, 0] + plane[1] * mesh.vertices[:, 1] + plane[2] - mesh.vertices[:, 2]
+    above = mesh.vertices[height > OBJECT_HEIGHT_M]
     write_mesh(mesh, out)
-    entry = database_entry(object_id, mesh.vertices, plane) if len(above) else None
+    proposals = []
+    if region is not None:
+        proposals = detected_point_sets(recording, plane, region[0], region[1])
+    entry = database_entry(object_id, mesh.vertices, plane, targets, "mesh.ply", proposals) if len(above) else None
     if entry is not None:
         import yaml
 
@@ -207,6 +369,7 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     render_picture(mesh, out / "mesh.png", title=f"{object_id}: {len(mesh.faces):,} triangles")
     report: dict[str, Any] = {
         "object": object_id, "recording": str(recording.folder), "pose_file": recording.pose_file,
+        "point_sets_from": "detector" if proposals else "mesh corners",
         "frames": result.frames, "voxel_m": voxel_m, "match_scale": scale,
         "triangles": int(len(mesh.faces)), "triangles_before_cleaning": int(len(result.raw_mesh.faces)),
         "area_m2": round(float(mesh.face_areas().sum()), 3),
@@ -225,5 +388,6 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     return report
 
 
-__all__ = ["Recording", "ReconstructionError", "database_entry", "find_recording", "read_recording", "reconstruct_run",
+__all__ = ["NamedTarget", "Recording", "ReconstructionError", "database_entry", "find_recording", "parse_target",
+           "detected_point_sets", "isolate_object", "read_recording", "reconstruct_run",
            "seabed_plane"]

@@ -12,6 +12,7 @@ from pydantic import BaseModel, ValidationError
 from mission.errors import Diagnostic, MissionError, PluginError
 from mission.language.checks import Parts, cross_check
 from mission.language.limits import MAX_DIAGNOSTICS
+from mission.language.mesh_file import mesh_file_problem
 from mission.language.models import (
     Home,
     KnownObject,
@@ -183,29 +184,32 @@ def _check_world(doc: Located, path: Path, world: str) -> tuple[Path | None, lis
     return world_path, diags
 
 
-def _check_models(doc: Located, path: Path, environment: bool) -> tuple[dict[int, str], list[Diagnostic]]:
-    """Multi-view model files named by database objects (`objects[i].model`), resolved like `world`: the
-    absolute paths by object index, and a located problem for each file that is missing or not a model."""
+def _check_models(doc: Located, path: Path, environment: bool, field: str = "model"
+                  ) -> tuple[dict[int, str], list[Diagnostic]]:
+    """Files named by database objects (`objects[i].model`, a multi-view model, or `objects[i].mesh`, a surface
+    mesh), resolved like `world`: the absolute paths by object index, and a located problem for each file that is
+    missing or not of its kind."""
     objects = doc.data.get("objects")
     if not isinstance(objects, list):
         return {}, []
+    kind, problem_of = ("mesh", mesh_file_problem) if field == "mesh" else ("model", model_file_problem)
     paths: dict[int, str] = {}
     diags: list[Diagnostic] = []
     for i, obj in enumerate(objects):
-        model = obj.get("model") if isinstance(obj, dict) else None
+        model = obj.get(field) if isinstance(obj, dict) else None
         if not isinstance(model, str):
             continue
         model_path = resolve_world_path(path, model)
         if not environment:
             paths[i] = str(model_path)
         elif not model_path.exists() and not model_path.is_symlink():
-            diags.append(doc.diagnostic(("objects", i, "model"),
-                                        f"model file '{model}' not found (looked at {model_path})"))
+            diags.append(doc.diagnostic(("objects", i, field),
+                                        f"{kind} file '{model}' not found (looked at {model_path})"))
         else:
-            problem = model_file_problem(model_path)
+            problem = problem_of(model_path)
             if problem:
-                diags.append(doc.diagnostic(("objects", i, "model"), f"model file '{model}' is not usable: "
-                                                                     f"{problem}"))
+                diags.append(doc.diagnostic(("objects", i, field), f"{kind} file '{model}' is not usable: "
+                                                                   f"{problem}"))
             paths[i] = str(model_path)
     return paths, diags
 
@@ -260,12 +264,13 @@ def validate_mission_file(path: str | Path, environment: bool = True) -> tuple[M
     elif isinstance(world, str) and mission is not None:
         world_path = resolve_world_path(path, world)
         mission = mission.model_copy(update={"world": str(world_path) if world_path.is_file() else None})
-    model_paths, model_diags = _check_models(doc, path, environment)
-    diags += model_diags
-    if mission is not None and model_paths:
-        mission = mission.model_copy(update={"objects": [
-            o.model_copy(update={"model": model_paths[i]}) if i in model_paths else o
-            for i, o in enumerate(mission.objects)]})
+    for field in ("model", "mesh"):
+        model_paths, model_diags = _check_models(doc, path, environment, field)
+        diags += model_diags
+        if mission is not None and model_paths:
+            mission = mission.model_copy(update={"objects": [
+                o.model_copy(update={field: model_paths[i]}) if i in model_paths else o
+                for i, o in enumerate(mission.objects)]})
     if mission is not None:
         mission._source = str(path)
     errors = [d for d in diags if not d.warning]

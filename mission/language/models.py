@@ -192,7 +192,6 @@ class Safety(Strict):
     energy_reserve: Percent = 20.0
     on_violation: OnViolation = OnViolation()
     # onboard: no heartbeat from the vehicle for this long is a lost link
-    # onboard: no heartbeat from the vehicle for this long is a lost link
     link_timeout: Annotated[Duration, Field(ge=0.1, le=L.MAX_LINK_TIMEOUT_S)] = 3.0
 
 
@@ -227,6 +226,7 @@ class KnownObject(Strict):
     targets: Annotated[list[Target], Field(max_length=L.MAX_TARGETS)] = []
     model: str | None = Field(None, description="multi-view model file (`auv model build`), relative to the "
                                                 "mission file; the loader resolves it to an absolute path")
+    mesh: str | None = None  # surface mesh (`auv reconstruct`: .ply or .glb), relative to the mission file
 
     @model_validator(mode="after")
     def _points_within_limit(self) -> KnownObject:

@@ -21,6 +21,13 @@ from mission.reconstruct import ReconstructionError, read_recording, reconstruct
 from mission.sim.stereo_record import StereoRecorder  # noqa: E402
 
 
+def _named_targets(views: Views) -> dict[str, np.ndarray]:
+    """True world positions of two features of the scene's wellhead: the tree's cap and the flowline stub's end."""
+    tree, stub = views.parts[1], views.parts[2]
+    return {"tree-cap": tree.T_world_part[:3, 3] - [0.0, 0.0, tree.half[2]],
+            "stub-end": stub.T_world_part[:3, 3] + stub.T_world_part[:3, 0] * stub.half[0] - [0.0, 0.0, stub.half[2]]}
+
+
 @pytest.fixture(scope="module")
 def views() -> Views:
     return render_views(rings=((35.0, 5), (70.0, 2)))
@@ -49,7 +56,9 @@ def test_the_recording_is_read_with_the_estimated_poses(run_dir: Path, views: Vi
 
 def test_reconstruct_writes_a_mesh_on_the_true_object_and_its_files(run_dir: Path, views: Views) -> None:
     out = run_dir / "out"
-    assert main(["reconstruct", str(run_dir), "--object", "wellhead-x", "--out", str(out), "--voxel", "0.05"]) == 0
+    targets = [f"--target={name}={n},{e},{d}:2.5" for name, (n, e, d) in _named_targets(views).items()]
+    assert main(["reconstruct", str(run_dir), "--object", "wellhead-x", "--out", str(out), "--voxel", "0.05",
+                 *targets]) == 0
     for name in ("mesh.ply", "mesh.glb", "points.ply", "mesh.png", "report.json"):
         assert (out / name).stat().st_size > 500, name
     report = json.loads((out / "report.json").read_text())
@@ -86,6 +95,8 @@ def test_the_database_entry_is_accepted_by_the_mission_language(run_dir: Path, t
     assert all(4 <= len(s["points"]) <= 6 for s in entry["characteristic_points"])
     assert entry["pose"]["depth"] == pytest.approx(SEABED_DEPTH, abs=0.1)
     assert entry["size"][2] == pytest.approx(3.0, abs=0.25)
+    assert entry["mesh"] == "mesh.ply"  # beside object.yaml; a mission names it relative to itself
+    entry["mesh"] = str(run_dir / "out" / "mesh.ply")
     mission = {"name": "uses-reconstruction", "objects": [entry],
                "sensors": {"usbl": {"sigma": 1.5}},
                "route": [{"id": "go", "transit": {"to": {"north": 0, "east": 0}, "depth": 20}}]}
@@ -93,5 +104,46 @@ def test_the_database_entry_is_accepted_by_the_mission_language(run_dir: Path, t
     path.write_text(yaml.safe_dump(mission, sort_keys=False))
     loaded, diagnostics = validate_mission_file(path)
     assert [d for d in diagnostics if not d.warning] == [] and loaded is not None
+    assert loaded.objects[0].mesh == str(run_dir / "out" / "mesh.ply")
     assert loaded.objects[0].characteristic_points[0].points[0] == pytest.approx(
         entry["characteristic_points"][0]["points"][0])
+
+
+def test_named_targets_land_in_the_entry_at_their_true_world_positions(run_dir: Path, views: Views) -> None:
+    import yaml
+
+    entry = yaml.safe_load((run_dir / "out" / "object.yaml").read_text())["objects"][0]
+    origin = np.array([entry["pose"][k] for k in ("north", "east", "depth")])
+    assert entry["pose"]["heading"] == 0.0  # the entry's axes are the world's: the conversion is a shift
+    centroids = {s["id"]: np.mean(s["points"], axis=0) for s in entry["characteristic_points"]}
+    named = _named_targets(views)
+    assert {t["id"] for t in entry["targets"]} == set(named)
+    for target in entry["targets"]:
+        assert origin + np.array(target["at"]) == pytest.approx(named[target["id"]], abs=1e-3)
+        assert target["standoff"] == 2.5
+        nearest = min(centroids, key=lambda k: float(np.linalg.norm(centroids[k] - np.array(target["at"]))))
+        assert target["reference"] == nearest
+
+
+def test_a_target_not_in_the_expected_form_is_refused_with_the_form() -> None:
+    from mission.reconstruct import parse_target
+
+    for text in ("valve=1,2", "=1,2,3", "valve=1,2,x", "valve=1,2,3:-1", "valve"):
+        with pytest.raises(ReconstructionError, match="NAME=NORTH,EAST,DEPTH"):
+            parse_target(text)
+
+
+def test_an_entry_whose_mesh_is_not_a_mesh_is_refused_at_its_line(tmp_path: Path) -> None:
+    from mission.language.loader import validate_mission_file
+
+    (tmp_path / "notes.ply").write_text("these are notes\n")
+    (tmp_path / "m.yaml").write_text(
+        "name: m\nsensors: {usbl: {sigma: 1.5}}\nobjects:\n"
+        "  - {id: a, pose: {north: 0, east: 0, depth: 30}, size: [1, 1, 1], mesh: notes.ply}\n"
+        "  - {id: b, pose: {north: 5, east: 0, depth: 30}, size: [1, 1, 1], mesh: b.obj}\n"
+        "route:\n  - {id: go, transit: {to: {north: 0, east: 0}, depth: 20}}\n")
+    loaded, diagnostics = validate_mission_file(tmp_path / "m.yaml")
+    messages = [str(d) for d in diagnostics if not d.warning]
+    assert loaded is None and len(messages) == 2
+    assert ":4:" in messages[0] and "not a PLY file" in messages[0]
+    assert ":5:" in messages[1] and "not found" in messages[1]
