@@ -43,8 +43,6 @@ MATCH_WIDTH_PX = 600
 """Images are matched shrunk by the whole factor that brings them nearest this width."""
 SEABED_MARGIN_M = 1.0
 """Seabed kept around the object's footprint in the outputs."""
-MAX_FEATURES = 600
-"""The stereo-referencing plug-in's feature budget (its default): the proposed sets hold what it will detect."""
 SEARCH = ("models/{id}", "model/{id}", "stereo/{id}", "{id}", "stereo")
 
 
@@ -280,6 +278,7 @@ def detected_point_sets(recording: Recording, plane: Array, lo: Array, hi: Array
     import cv2
 
     from perception_plugins.reconstruction.keypoints import group_sets, stable_points
+    from perception_plugins.referencing.plugin import MAX_FEATURES  # the proposed sets hold what it will detect
     from perception_plugins.stereo import RectifiedStereo, stereo_cloud
 
     first = cv2.imread(str(recording.left[0]), cv2.IMREAD_GRAYSCALE)
@@ -388,6 +387,5 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     return report
 
 
-__all__ = ["NamedTarget", "Recording", "ReconstructionError", "database_entry", "find_recording", "parse_target",
-           "detected_point_sets", "isolate_object", "read_recording", "reconstruct_run",
-           "seabed_plane"]
+__all__ = ["NamedTarget", "Recording", "ReconstructionError", "database_entry", "detected_point_sets",
+           "find_recording", "isolate_object", "parse_target", "read_recording", "reconstruct_run", "seabed_plane"]

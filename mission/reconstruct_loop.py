@@ -36,11 +36,10 @@ def _true_poses(run_dir: Path) -> tuple[np.ndarray, np.ndarray]:
 def photo_errors(run_dir: Path, element_id: str, entry: Mapping[str, Any],
                  targets_world: Mapping[str, Sequence[float]], baseline: float) -> list[dict[str, Any]]:
     """One row per photograph of the inspect element `element_id`: its target, the true camera's distance from
-    the viewpoint placed on the target's true world position (`error_m`), and whether the true target projects
-    into the image's central half (`target_centred`: within a quarter of the image from the centre, which a
-    photograph at its standoff must achieve). `entry` is the database entry the mission used (for its heading and
-    its targets' object-frame positions); `baseline` the stereo baseline (the left camera is the one photographed
-    with)."""
+    the viewpoint placed on the target's true world position (`error_m`), and how far off the optical axis the true
+    target is (`target_off_axis`: the tangent of its angle from the axis; 0 is the image centre). `entry` is the
+    database entry the mission used (for its heading and its targets' object-frame positions); `baseline` the
+    stereo baseline (the left camera is the one photographed with)."""
     metrics = json.loads((run_dir / "metrics.json").read_text(encoding="utf-8"))
     element = next((e for e in metrics["elements"] if e["id"] == element_id), None)
     if element is None:

@@ -3,12 +3,11 @@ Harris detector extracts well from above; seed 000: sets that fix the object's p
 
 The mesh is seen from above as a height map over the seabed plane (the highest vertex in each cell); Harris
 corners of its outlines (on the log of the heights, so that a low frame's corner counts as much as a tall
-column's) are 3D
-corners of the object a down-looking camera will find, each placed on the top face of its step. The strongest
-corner and its nearest neighbours make a set of `set_size` (4–6; near, so that one view holds the set), then the
-next strongest left and its neighbours; a set is symmetric when a quarter or half turn about its centroid maps it
-onto itself within `tolerance` (then the prior heading must choose, as the database says of such sets), and a
-farther corner replaces the last one when that breaks the symmetry.
+column's) are 3D corners of the object a down-looking camera will find, each placed on the top face of its step.
+The strongest corner and its nearest neighbours make a set of `set_size` (4–6; near, so that one view holds the
+set), then the next strongest left and its neighbours; a set is symmetric when a quarter or half turn about its
+centroid maps it onto itself within `tolerance` (then the prior heading must choose, as the database says of such
+sets), and a farther corner replaces the last one when that breaks the symmetry.
 """
 
 from __future__ import annotations

@@ -41,6 +41,8 @@ from perception_plugins.stereo.camera import RectifiedStereo
 from perception_plugins.stereo.pipeline import stereo_cloud
 
 REFERENCE_RANGE_M = 3.6  # the range at which the request's tolerance applies (seed 000's virtual scene)
+MAX_FEATURES = 600
+"""Harris corners kept per image by default (`referencing.max_features` overrides it)."""
 
 
 class StereoReferencingPlugin:
@@ -48,7 +50,7 @@ class StereoReferencingPlugin:
 
     def __init__(self) -> None:
         self.max_range = 8.0
-        self.max_features = 600
+        self.max_features = MAX_FEATURES
         self.gate_m = 5.0
         self.gate_deg = 25.0
         self.gate_tilt_deg = 6.0
