@@ -53,7 +53,6 @@ class OdometryChain:
     lost: int = 0
     last_c: np.ndarray | None = None
     disagrees: bool = False  # odometry moved the object further than navigation can drift (see `_apply`)
-    anchor: np.ndarray | None = None  # the object's position (navigation frame) when the chain started
     stats: OdometryStats = field(default_factory=OdometryStats)
     report: OdometryReport = field(default_factory=OdometryReport)
     _chain: int = 0
@@ -89,7 +88,6 @@ class OdometryChain:
     def start(self, frame: StereoImages, nav: NavState) -> None:
         """`frame` (taken at `nav`) is referenced: it becomes the origin of a new chain."""
         self.T_object_origin = self.place.camera_in_object(nav)
-        self.anchor = self.place.T_wo[:3, 3].copy()
         self.path_m, self.lost, self.disagrees = 0.0, 0, False
         self.last_c = self.T_object_origin[:3, 3].copy()
         self._chain += 1
@@ -134,8 +132,8 @@ class OdometryChain:
         T_world_cam = self.place.camera_in_world(pending.nav)
         anchored = T_world_cam[:3, 3] - self.place.T_wo[:3, :3] @ c
         s = self.settings
-        allowed = s.vo_object_shift_m + s.vo_object_shift_per_m * (self.path_m + step)
-        if self.anchor is not None and float(np.linalg.norm(anchored - self.anchor)) > allowed:
+        allowed = s.vo_object_shift_m + s.vo_object_shift_per_m * (self.place.path_since_fix + step)
+        if float(np.linalg.norm(anchored - self.place.trusted[:3, 3])) > allowed:
             # Odometry and navigation disagree about how the vehicle moved by more than navigation can drift:
             # following odometry would drag the object (and the viewpoint the vehicle chases) along. End the
             # chain; the agent re-references.

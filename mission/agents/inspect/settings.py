@@ -46,8 +46,8 @@ class InspectSettings:
     vo_lost_frames: int = 4  # consecutive lost frames that end an odometry chain
     vo_max_step_m: float = 0.5  # a jump larger than this between frames is not motion but a failure
     # The object stands still: odometry may move it in the navigation frame only as far as navigation can drift
-    # and jump (USBL fixes move the estimate by up to ~0.3 m a tick, ~0.6 m over an inspection) since the chain
-    # started, plus a share of the chain's path; beyond that the chain disagrees with navigation and ends
+    # and jump (USBL fixes move the estimate by up to ~0.3 m a tick, ~0.6 m over an inspection) since the fix,
+    # plus a share of the path; beyond that the chain disagrees with navigation and ends
     vo_object_shift_m: float = 1.0
     vo_object_shift_per_m: float = 0.05
     # photographs
