@@ -307,18 +307,25 @@ def detected_point_sets(recording: Recording, plane: Array, lo: Array, hi: Array
 
 
 def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
-                    voxel_m: float = 0.02, targets: tuple[NamedTarget, ...] = (), element: str | None = None
-                    ) -> dict[str, Any]:
+                    voxel_m: float = 0.02, targets: tuple[NamedTarget, ...] = (), element: str | None = None,
+                    poses: str = "anchored") -> dict[str, Any]:
     """Reconstruct the object from the run's recording (`find_recording`) and write the outputs; returns the
-    report. `targets` (world NED) go into the database entry in its object frame."""
+    report. `targets` (world NED) go into the database entry in its object frame. `poses`: "anchored" fuses at the
+    navigation poses held together by stereo odometry (`mission.reconstruct_poses`), "navigation" at the
+    recording's own."""
     import cv2
 
     from mission.reconstruct_io import render_picture, write_mesh, write_points
+    from mission.reconstruct_poses import anchored_recording
     from perception_plugins.reconstruction import RangeSettings, ReconstructionSettings, fuse_views, points_from_range
 
     recording = read_recording(find_recording(run_dir, object_id, element))
+    graph = None
+    if poses == "anchored":
+        recording, graph = anchored_recording(recording)
     out = out_dir or run_dir / "models" / object_id / "reconstruction"
     out.mkdir(parents=True, exist_ok=True)
+    np.savetxt(out / "camera_poses.txt", recording.poses[:, :3, :4].reshape(-1, 12), fmt="%.9e")
     maps: list[Any] = []
 
     def views() -> Any:
@@ -367,7 +374,7 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     write_points(points, point_grey, out / "points.ply")
     render_picture(mesh, out / "mesh.png", title=f"{object_id}: {len(mesh.faces):,} triangles")
     report: dict[str, Any] = {
-        "object": object_id, "recording": str(recording.folder), "pose_file": recording.pose_file,
+        "object": object_id, "recording": str(recording.folder), "pose_file": recording.pose_file, "graph": graph,
         "point_sets_from": "detector" if proposals else "mesh corners",
         "frames": result.frames, "voxel_m": voxel_m, "match_scale": scale,
         "triangles": int(len(mesh.faces)), "triangles_before_cleaning": int(len(result.raw_mesh.faces)),
@@ -380,7 +387,7 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
                     "fusion_per_frame": float(np.median(result.fusion_s)),
                     "extract_and_clean": result.extract_s, "wall_total": time.perf_counter() - t0},
         "volume_mb": round(result.volume.nbytes / 1e6, 2),
-        "files": ["mesh.ply", "mesh.glb", "points.ply", "mesh.png", "report.json"]
+        "files": ["mesh.ply", "mesh.glb", "points.ply", "mesh.png", "report.json", "camera_poses.txt"]
         + (["object.yaml"] if entry is not None else []), "out": str(out),
     }
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")

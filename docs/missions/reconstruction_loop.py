@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 import sys
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -98,6 +99,8 @@ def name_targets(recon: Path) -> np.ndarray:
     # The sets as `auv reconstruct` proposes them (the plug-in's detector on the close views), from the mesh written.
     region = isolate_object(vertices, plane)
     recording = read_recording(find_recording(recon.parent, "wellhead-x", "scan-unknown"))
+    fused = np.loadtxt(recon / "camera_poses.txt").reshape(-1, 3, 4)  # the poses the mesh was fused at
+    recording = replace(recording, poses=np.concatenate([fused, np.tile([[[0.0, 0, 0, 1]]], (len(fused), 1, 1))], 1))
     proposals = detected_point_sets(recording, region[2], region[0], region[1]) if region is not None else []
     entry = database_entry("wellhead-x", vertices, plane, targets, "mesh.ply", proposals)
     (recon / "object.yaml").write_text(yaml.safe_dump({"objects": [entry]}, sort_keys=False), encoding="utf-8")
