@@ -374,7 +374,8 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     write_points(points, point_grey, out / "points.ply")
     render_picture(mesh, out / "mesh.png", title=f"{object_id}: {len(mesh.faces):,} triangles")
     report: dict[str, Any] = {
-        "object": object_id, "recording": str(recording.folder), "pose_file": recording.pose_file, "graph": graph,
+        "object": object_id, "recording": str(recording.folder), "pose_file": recording.pose_file, "poses": poses,
+        "graph": graph,
         "point_sets_from": "detector" if proposals else "mesh corners",
         "frames": result.frames, "voxel_m": voxel_m, "match_scale": scale,
         "triangles": int(len(mesh.faces)), "triangles_before_cleaning": int(len(result.raw_mesh.faces)),

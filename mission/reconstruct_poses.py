@@ -65,7 +65,7 @@ def anchored_recording(recording: Recording) -> tuple[Recording, dict[str, Any]]
               "pairs_tried": len(pairs), "moved_from_navigation_m": {"median": round(float(np.median(moved)), 4),
                                                                      "max": round(float(moved.max()), 4)},
               "seconds": {"motions": round(t1 - t0, 2), "graph": round(t2 - t1, 2)}}
-    return replace(recording, poses=poses, pose_file=f"{recording.pose_file} anchored by stereo odometry"), report
+    return replace(recording, poses=poses), report
 
 
 __all__ = ["POSE_SOURCES", "anchored_recording", "frame_times"]

@@ -63,6 +63,9 @@ def test_reconstruct_writes_a_mesh_on_the_true_object_and_its_files(run_dir: Pat
         assert (out / name).stat().st_size > 500, name
     report = json.loads((out / "report.json").read_text())
     assert report["pose_file"] == "nav.txt" and report["frames"] == len(views.poses)
+    # Seven views 50° apart around the object: the graph measures no motion between them and keeps navigation's.
+    assert report["poses"] == "anchored" and report["graph"]["pairs_tried"] >= len(views.poses) - 1
+    assert report["graph"]["moved_from_navigation_m"]["max"] < 0.01
     plane = report["seabed_plane"]
     # The flat seabed. At these small images (fx 400) the fused seabed comes out ~9 cm shallow (the range maps
     # alone are within 2 cm): a known shortfall, bounded here so that it cannot grow unnoticed.
