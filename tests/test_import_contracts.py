@@ -27,7 +27,8 @@ ROOT = Path(__file__).resolve().parents[1]
 TOOLS = ("mission/sim/", "mission/world/", "mission/bench/", "mission/cli.py", "mission/cli_onboard.py",
          "mission/cli_plan.py", "mission/cli_report.py", "mission/campaign_report.py",
          "mission/__main__.py", "mission/model_build.py", "mission/reconstruct.py", "mission/reconstruct_io.py",
-         "mission/cli_reconstruct.py")
+         "mission/cli_reconstruct.py", "mission/reconstruct_model.py", "mission/reconstruct_poses.py",
+         "mission/reconstruct_sets.py")
 
 CORE_FORBIDDEN = ("mission.sim", "mission.world", "mission.bench", "mission.cli", "mission.cli_onboard",
                   "mission.plots",

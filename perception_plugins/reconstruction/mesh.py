@@ -79,11 +79,14 @@ def mesh_from_volume(vol: DenseVolume, min_weight: float = 0.0) -> Mesh:
     # scikit-image gates the cube starting at (i, j, k) by mask[i + 1, j + 1, k + 1] (its far corner).
     mask = np.zeros_like(cubes)
     mask[1:, 1:, 1:] = cubes[:-1, :-1, :-1]
+    empty = Mesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), np.zeros(0, np.float32), np.zeros(0, np.float32))
     if not cubes.any() or vol.tsdf[cubes].min() >= 0 or vol.tsdf[cubes].max() <= 0:
-        return Mesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), np.zeros(0, np.float32),
-                    np.zeros(0, np.float32))
-    verts, faces, _, _ = marching_cubes(  # type: ignore[no-untyped-call,unused-ignore]
-        vol.tsdf, level=0.0, mask=mask, allow_degenerate=False)
+        return empty
+    try:
+        verts, faces, _, _ = marching_cubes(  # type: ignore[no-untyped-call,unused-ignore]
+            vol.tsdf, level=0.0, mask=mask, allow_degenerate=False)
+    except RuntimeError:  # scikit-image: "No surface found" when no meshed cube's corners change sign
+        return empty
     # Each vertex lies on one grid edge: the axis with a fractional coordinate; read both ends' values.
     lo = np.floor(verts).astype(np.int64)
     frac = verts - lo
