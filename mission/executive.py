@@ -164,7 +164,8 @@ class Executive:
             return rep
         aided = self.usbl_available and agent.navigation == "usbl"
         self.vehicle.set_aiding(aided)
-        recording = ElementStereo(self.artifacts.root, element_id) \
+        stereo = self.mission.sensors.stereo
+        recording = ElementStereo(self.artifacts.root, element_id, stereo.mount.R_body_cam() if stereo else None) \
             if any(a in RECORDING_ACTIONS for a in element.actions) else None
         extra = frozenset({"stereo"}) if recording is not None else frozenset()
         payload, rate = agent.payload, agent.frame_rate_hz

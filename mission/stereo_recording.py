@@ -21,7 +21,7 @@ from typing import IO, Any
 import numpy as np
 
 from mission.errors import AuvError
-from mission.frames import Array, camera_pose
+from mission.frames import R_BODY_CAM, Array, camera_pose
 from mission.plugin_api import StereoImages
 from mission.vehicle import Observation
 
@@ -118,8 +118,9 @@ class ElementStereo:
     delivers while the element runs, with the estimated left-camera pose, in `root/stereo/ELEMENT_ID/`
     (`relpath`). Without a `root` (no run folder) it only counts the pairs."""
 
-    def __init__(self, root: Path | None, element_id: str):
+    def __init__(self, root: Path | None, element_id: str, R_body_cam: Array | None = None):
         self.relpath = f"stereo/{element_id}"
+        self.R_body_cam = R_body_cam  # the camera's mount (None: looking down)
         self.pairs = 0
         self._recorder = StereoRecorder(root / self.relpath, ("poses",)) if root is not None else None
 
@@ -127,7 +128,8 @@ class ElementStereo:
         """Record the pairs of one tick at the tick's estimated pose (position, measured depth and heading)."""
         nav = observation.nav
         for images in observation.stereo:
-            T_world_left = camera_pose(nav.north, nav.east, nav.depth, nav.heading, baseline=float(images.baseline))
+            T_world_left = camera_pose(nav.north, nav.east, nav.depth, nav.heading, baseline=float(images.baseline),
+                                       R_body_cam=R_BODY_CAM if self.R_body_cam is None else self.R_body_cam)
             if self._recorder is not None:
                 self._recorder.write(images, T_world_left)
             self.pairs += 1

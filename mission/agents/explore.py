@@ -13,7 +13,8 @@
    the vehicle flies there on a safe path (`planners.nbv.connect`: straight when safe, else RRT* of
    `planners.rrt`), station keeping along it (`station_path.StationPath`) with the scanner pointed at the view's
    heading; a path that a later frame shows unsafe is abandoned and a new view proposed;
-3. stop when the map's own estimate of the object's observed surface reaches `COVERAGE_TARGET`, when no view
+3. stop when the map's own estimate of the object's observed surface reaches `COVERAGE_TARGET` (`goal:
+   reconstruct`: when the stereo camera has seen enough of the mapped surface well, `explore_stereo`), when no view
    would reveal anything, or when the element's budget (less the time to climb away) runs out; then climb back
    to the depth the element started at.
 
@@ -46,15 +47,16 @@ from mission.agents.explore_nbv import (
 from mission.agents.explore_region import (
     targets,
 )
+from mission.agents.explore_stereo import STEREO_TARGET, ReconstructNbv, camera_of
 from mission.agents.report import ExploreReport
 from mission.agents.station_path import StationPath
 from mission.frames import wrap_deg
-from mission.language.models import Explore
+from mission.language.models import EXPLORE_NAV_MARGIN_M, Explore
 from mission.vehicle import Command, NavState, Observation, ScanFrame
 from planners.nbv import UNKNOWN, NbvPlanner, Scanner, View, Weights, connect
 
 PLANNING_RAYS = (24, 18)  # the planner's model of the frustum; the sensor itself has more rays
-NAV_MARGIN_M = 1.0
+NAV_MARGIN_M = EXPLORE_NAV_MARGIN_M
 COVERAGE_TARGET = 0.97
 MAX_REJECTIONS = 10
 HEADING_TOLERANCE_DEG = 6.0
@@ -108,7 +110,12 @@ class ExploreAgent(Agent):
                              PLANNING_RAYS)
         self.safe = p.safe_distance + NAV_MARGIN_M
         self.weights = Weights(p.weights.distance, p.weights.frontier, p.weights.contour)
-        self.payload = frozenset({"scanner"})
+        self.camera = None
+        if p.goal == "reconstruct":
+            if m.sensors.stereo is None:
+                raise ValueError("explore with `goal: reconstruct` needs `sensors.stereo`")
+            self.camera = camera_of(m.sensors.stereo)
+        self.payload = frozenset({"scanner"} | ({"stereo"} if self.camera is not None else set()))
         self.tilt: float | None = None
         self.index = -1
         self.phase = Phase.APPROACH
@@ -137,7 +144,7 @@ class ExploreAgent(Agent):
         self.cruise_depth = min(nav.depth, target.top_depth - self.safe - 1.0)
         run = target_run(target, self.context.knowledge, self.model, self.weights, self.safe, self.cruise_depth - 1.0,
                          self.context.mission.seed + self.index, (nav.north, nav.east),
-                         self.tilt if self.tilt is not None else 25.0)
+                         self.tilt if self.tilt is not None else 25.0, camera=self.camera)
         self.runs.append(run)
         self.run = run
         if run.stop_reason:
@@ -166,6 +173,10 @@ class ExploreAgent(Agent):
             return command
         for frame in observation.scans:
             self._integrate(frame)
+        if self.run is not None and isinstance(self.run.planner, ReconstructNbv) and self.phase is not Phase.LEAVE:
+            for _ in observation.stereo:  # each pair the camera took, at the estimated pose of this tick
+                self.run.planner.add_pose(nav.north, nav.east, nav.depth, nav.heading)
+                self.run.stereo_pairs += 1
         budget_left = self.params.budget - (nav.time - self.t0)
         climb = max(0.0, nav.depth - self.exit_depth) / CLIMB_RATE + 15.0
         if self.phase is not Phase.LEAVE and budget_left <= climb:
@@ -262,7 +273,11 @@ class ExploreAgent(Agent):
         assert run is not None and self.goal is not None
         t0, c0 = time.perf_counter(), time.process_time()
         run.estimate = run.coverage_estimate()
-        if run.estimate >= COVERAGE_TARGET:
+        if isinstance(run.planner, ReconstructNbv):
+            done = self._stereo_done(nav, run, run.planner)
+        else:
+            done = run.estimate >= COVERAGE_TARGET
+        if done:
             self._next_target(nav, "coverage target")
             return self._hold() if self.phase is not Phase.APPROACH else self._approach(nav, here)
         pose = View.at(here, nav.heading, -(self.tilt or 25.0))
@@ -289,6 +304,15 @@ class ExploreAgent(Agent):
         self.rejections = 0
         self._go(view, path)
         return self._move(nav, here)
+
+    def _stereo_done(self, nav: NavState, run: TargetRun, planner: ReconstructNbv) -> bool:
+        """`reconstruct` goal: bring the stereo coverage record up to date, log it, and whether it reached the
+        target (on an object bounded from enough sides: `TargetRun.bounded`)."""
+        share = run.stereo_share = planner.stereo_share()
+        self.context.emit("explore_stereo_coverage", nav.time, element=self.context.element.id,
+                          object=run.target.id, view=len(run.views), pairs=run.stereo_pairs,
+                          share_percent=round(100.0 * share, 1), bounded=round(run.bounded(), 2))
+        return run.bounded() * share >= STEREO_TARGET
 
     def _leave(self) -> None:
         self.phase = Phase.LEAVE
@@ -322,6 +346,16 @@ class ExploreAgent(Agent):
                                  "max": round(float(np.max(all_cpu)), 1) if all_cpu else None},
             "safe_distance_m": self.params.safe_distance, "planning_distance_m": self.safe,
             "scanner_tilt_deg": round(self.tilt, 2) if self.tilt is not None else None})
+        stereo = self.context.mission.sensors.stereo
+        if stereo is not None and (self.camera is not None or {"model", "record"} & set(self.context.element.actions)):
+            camera = camera_of(stereo)  # what the truth's stereo coverage scores the recorded pairs with
+            self.report.figures["goal"] = self.params.goal
+            self.report.figures["stereo_camera"] = {"fov_deg": [round(a, 3) for a in camera.fov_deg],
+                                                    "useful_range_m": camera.useful_range,
+                                                    "min_range_m": camera.min_range}
+            shares = [r.stereo_share for r in self.runs if r.stereo_share is not None]
+            if shares:
+                self.report.figures["stereo_coverage_estimate_percent"] = round(100.0 * float(np.mean(shares)), 1)
         self.context.knowledge.maps[self.context.element.id] = {
             **products, "explore_track": np.asarray(self.track, dtype=np.float64).reshape(-1, 4),
             "explore_resolution": np.array(RESOLUTION_M)}

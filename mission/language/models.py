@@ -286,10 +286,20 @@ class Weights(Strict):
     contour: Annotated[float, between(0.0, 1000.0)] = 0.2
 
 
+EXPLORE_NAV_MARGIN_M = 1.0
+"""What next-best-view exploration adds to `safe_distance` for the navigation error between its map and the truth
+(its planning distance)."""
+
+
 class Explore(Strict):
+    """`goal: map` scans for the occupancy map; `goal: reconstruct` (next-best-view with a stereo camera) also
+    plans the views so that the stereo camera sees every face at a useful range and incidence
+    (`mission.agents.explore_stereo`)."""
+
     object: Identifier = "detected"
     sensor: Literal["scanner", "stereo", "mbes"] = "scanner"
     planner: Literal["next-best-view", "rrt-photo"] = "next-best-view"
+    goal: Literal["map", "reconstruct"] = "map"
     weights: Weights = Weights()
     safe_distance: Distance = 5.0
     budget: Time = 900.0

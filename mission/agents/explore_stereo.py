@@ -1,0 +1,90 @@
+"""The explore planner's `reconstruct` goal (issue 22): next-best views for the stereo camera as well as the
+scanner, so that a reconstruction (`auv reconstruct`) gets every face of the object at a useful range and
+incidence.
+
+`ReconstructNbv` is the fixed-mount planner with a per-voxel record of how well the stereo camera has seen each
+occupied voxel of the object's region (`planners.nbv.StereoCoverage`: in the frustum, within
+`USEFUL_RANGE_SHARE` of the stereo range, at most `MAX_INCIDENCE_DEG` off the surface normal, not hidden),
+updated with the camera's *estimated* pose at each stereo pair the vehicle delivers; candidates are drawn on a
+shell that keeps the anchor surface within the useful range of the camera (never nearer than the planning
+distance), and the utility adds the voxels a candidate's camera would newly see well
+(`planners.nbv.reconstruct_utility`, weight `STEREO_WEIGHT`). The element stops when the share of the mapped
+surface seen well, times how far the object is bounded (`TargetRun.bounded`), reaches `STEREO_TARGET`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mission.agents.explore_nbv import FixedMountNbv
+from mission.language.models import Stereo
+from mission.language.mount import R_body_cam_of
+from planners.nbv import (
+    Camera,
+    StereoCoverage,
+    Views,
+    camera_rotations,
+    reconstruct_utility,
+    stereo_gain,
+    surface_normals,
+)
+
+STEREO_TARGET = 0.90
+"""The element stops once this share of the object's mapped surface was seen well by the stereo camera."""
+STEREO_WEIGHT = 0.6
+"""Weight of the stereo term against the seed's utility (which keeps the map growing and the moves short)."""
+
+
+def camera_of(stereo: Stereo) -> Camera:
+    """The planner's model of the mission's stereo camera (`sensors.stereo`, its mount included)."""
+    return Camera.of_stereo(stereo.width, stereo.height, stereo.fx, stereo.max_range, R_body_cam_of(stereo))
+
+
+@dataclass
+class ReconstructNbv(FixedMountNbv):
+    """`FixedMountNbv` that also plans for the stereo camera (the module docstring); `region` (a mask over the
+    grid: the object's region above the seabed) says which occupied voxels are the object's surface."""
+
+    camera: Camera | None = None
+    region: NDArray[np.bool_] | None = None
+    coverage: StereoCoverage = field(init=False)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.camera is None:
+            raise ValueError("the reconstruct goal needs a stereo camera")
+        self.coverage = StereoCoverage(self.camera, self.grid.shape)
+
+    def surface_ids(self) -> NDArray[np.int64]:
+        """Flat ids of the occupied voxels of the object's region (all occupied voxels without a region)."""
+        ids = self.grid.occupied_ids
+        return ids if self.region is None else np.asarray(ids[self.region.reshape(-1)[ids]])
+
+    def add_pose(self, north: float, east: float, depth: float, heading_deg: float) -> None:
+        """A stereo pair taken with the vehicle (level) at this estimated pose."""
+        assert self.camera is not None
+        self.coverage.add_pose((north, east, depth), camera_rotations([heading_deg], self.camera.R_body_cam)[0])
+
+    def stereo_share(self) -> float:
+        """Bring the coverage record up to date; the share of the object's mapped surface seen well."""
+        return self.coverage.update(self.grid, self.surface_ids())
+
+    def extra_gain(self, views: Views) -> NDArray[np.int64]:
+        assert self.camera is not None
+        ids = self.surface_ids()
+        todo = ids[~self.coverage.well.reshape(-1)[ids]]
+        ijk = np.stack(np.unravel_index(todo, self.grid.shape), axis=1)
+        return stereo_gain(self.grid, self.grid.centres(ijk), surface_normals(self.grid.states, ijk),
+                           views.positions, camera_rotations(views.heading_deg, self.camera.R_body_cam), self.camera)
+
+    def with_extra(self, u: NDArray[np.float64], extra: NDArray[np.int64]) -> NDArray[np.float64]:
+        return reconstruct_utility(u, extra, STEREO_WEIGHT)
+
+
+def shell_band(camera: Camera, planning_distance: float, cell: float) -> float:
+    """How far beyond the nearest candidate distance (`planning_distance` + a safety cell) candidates are drawn
+    from the surface voxel they look at, so that it stays within the camera's useful range (at least 1 m)."""
+    return max(camera.useful_range - planning_distance - cell, 1.0)
