@@ -47,7 +47,7 @@ from mission.agents.explore_nbv import (
 from mission.agents.explore_region import (
     targets,
 )
-from mission.agents.explore_stereo import STEREO_TARGET, ReconstructNbv, camera_of
+from mission.agents.explore_stereo import STEREO_TARGET, ReconstructNbv, camera_of, climb_clear
 from mission.agents.report import ExploreReport
 from mission.agents.station_path import StationPath
 from mission.frames import wrap_deg
@@ -294,6 +294,12 @@ class ExploreAgent(Agent):
         path = connect(run.planner.safety, here, view.point, self.safe, seed=self.context.mission.seed)
         run.iterations_ms.append(1e3 * (time.perf_counter() - t0))
         run.iterations_cpu_ms.append(1e3 * (time.process_time() - c0))
+        if path is None and isinstance(run.planner, ReconstructNbv):
+            up = climb_clear(run.planner.safety, here, self.safe)
+            if up is not None:  # the vehicle, not the view, is what no path leaves from: climb clear first
+                run.climbs += 1
+                self._go(View.at(up, nav.heading, -(self.tilt or 25.0)), np.stack([here, up]))
+                return self._move(nav, here)
         if path is None:
             run.planner.reject(view)
             run.rejected += 1

@@ -164,6 +164,8 @@ class TargetRun:
     stereo_share: float | None = None
     """`reconstruct` goal: the share of the object's mapped surface the stereo camera has seen well."""
     stereo_pairs: int = 0
+    climbs: int = 0
+    """`reconstruct` goal: climbs clear of a position no path left from (`explore_stereo.climb_clear`)."""
 
     def object_voxels(self) -> np.ndarray:
         """Flat grid ids of the occupied voxels of the object's region above the seabed."""
@@ -294,7 +296,7 @@ def nbv_results(runs: list[TargetRun], t0: float) -> tuple[list[ExploredObject],
             "object_voxels_mapped": int(len(run.object_voxels())),
             **({} if run.stereo_share is None else {
                 "stereo_coverage_estimate_percent": round(100.0 * run.stereo_share, 1),
-                "stereo_pairs_planned_with": run.stereo_pairs})}))
+                "stereo_pairs_planned_with": run.stereo_pairs, "climbs": run.climbs})}))
     products = {
         "explore_occupied": np.concatenate(occupied).astype(np.float32) if occupied else np.zeros((0, 4)),
         "explore_views": np.asarray(views, dtype=np.float64).reshape(-1, 6),

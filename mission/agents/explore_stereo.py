@@ -9,7 +9,9 @@ updated with the camera's *estimated* pose at each stereo pair the vehicle deliv
 shell that keeps the anchor surface within the useful range of the camera (never nearer than the planning
 distance), and the utility adds the voxels a candidate's camera would newly see well
 (`planners.nbv.reconstruct_utility`, weight `STEREO_WEIGHT`). The element stops when the share of the mapped
-surface seen well, times how far the object is bounded (`TargetRun.bounded`), reaches `STEREO_TARGET`.
+surface seen well, times how far the object is bounded (`TargetRun.bounded`), reaches `STEREO_TARGET`. When no
+path leaves the vehicle's position (a view near the planning distance, then a frame that reveals more structure),
+it climbs clear first (`climb_clear`) instead of giving the view up.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from mission.agents.explore_nbv import FixedMountNbv
 from mission.language.models import Stereo
@@ -27,10 +29,12 @@ from planners.nbv import (
     StereoCoverage,
     Views,
     camera_rotations,
+    is_safe,
     reconstruct_utility,
     stereo_gain,
     surface_normals,
 )
+from planners.rrt import ClearanceGrid
 
 STEREO_TARGET = 0.90
 """The element stops once this share of the object's mapped surface was seen well by the stereo camera."""
@@ -88,3 +92,20 @@ def shell_band(camera: Camera, planning_distance: float, cell: float) -> float:
     """How far beyond the nearest candidate distance (`planning_distance` + a safety cell) candidates are drawn
     from the surface voxel they look at, so that it stays within the camera's useful range (at least 1 m)."""
     return max(camera.useful_range - planning_distance - cell, 1.0)
+
+
+CLIMB_STEPS_M = (0.5, 1.0, 1.5, 2.0, 3.0)
+
+
+def climb_clear(safety: ClearanceGrid, here: ArrayLike, safe: float) -> NDArray[np.float64] | None:
+    """The nearest point straight above `here` that the paths between views may start from (`is_safe`), when
+    `here` is not one; None when `here` is one or none within 3 m is. Views near the planning distance leave the
+    vehicle there, and a frame that reveals more of the structure can put it under the paths' threshold."""
+    p = np.asarray(here, dtype=float).reshape(3)
+    if is_safe(safety, p[None], safe)[0]:
+        return None
+    for dz in CLIMB_STEPS_M:
+        q = p - np.array([0.0, 0.0, dz])
+        if is_safe(safety, q[None], safe)[0]:
+            return np.asarray(q, dtype=np.float64)
+    return None
