@@ -7,7 +7,8 @@ occupied voxel of the object's region (`planners.nbv.StereoCoverage`: in the fru
 `USEFUL_RANGE_SHARE` of the stereo range, at most `MAX_INCIDENCE_DEG` off the surface normal, not hidden),
 updated with the camera's *estimated* pose at each stereo pair the vehicle delivers; candidates are drawn on a
 shell that keeps the anchor surface within the useful range of the camera (never nearer than the planning
-distance), and the utility adds the voxels a candidate's camera would newly see well
+distance), candidates aimed at surface not yet seen well are added (`planners.nbv.camera_candidates`: the
+surface at the image centre, in range, faced), and the utility adds the voxels a candidate's camera would newly see well
 (`planners.nbv.reconstruct_utility`, weight `STEREO_WEIGHT`). The element stops when the share of the mapped
 surface seen well, times how far the object is bounded (`TargetRun.bounded`), reaches `STEREO_TARGET`. When no
 path leaves the vehicle's position (a view near the planning distance, then a frame that reveals more structure),
@@ -28,6 +29,7 @@ from planners.nbv import (
     Camera,
     StereoCoverage,
     Views,
+    camera_candidates,
     camera_rotations,
     is_safe,
     reconstruct_utility,
@@ -38,6 +40,8 @@ from planners.rrt import ClearanceGrid
 
 STEREO_TARGET = 0.90
 """The element stops once this share of the object's mapped surface was seen well by the stereo camera."""
+CAMERA_CANDIDATES = 100
+"""Candidates aimed at unseen surface (`planners.nbv.camera_candidates`) added to the shell's at each proposal."""
 STEREO_WEIGHT = 0.6
 """Weight of the stereo term against the seed's utility (which keeps the map growing and the moves short)."""
 
@@ -76,13 +80,26 @@ class ReconstructNbv(FixedMountNbv):
         """Bring the coverage record up to date; the share of the object's mapped surface seen well."""
         return self.coverage.update(self.grid, self.surface_ids())
 
-    def extra_gain(self, views: Views) -> NDArray[np.int64]:
-        assert self.camera is not None
+    def unseen(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Centres and normals of the object's mapped surface voxels not yet seen well."""
         ids = self.surface_ids()
         todo = ids[~self.coverage.well.reshape(-1)[ids]]
         ijk = np.stack(np.unravel_index(todo, self.grid.shape), axis=1)
-        return stereo_gain(self.grid, self.grid.centres(ijk), surface_normals(self.grid.states, ijk),
-                           views.positions, camera_rotations(views.heading_deg, self.camera.R_body_cam), self.camera)
+        return self.grid.centres(ijk), surface_normals(self.grid.states, ijk)
+
+    def extra_candidates(self) -> Views:
+        assert self.camera is not None
+        points, normals = self.unseen()
+        views = camera_candidates(self.grid, self.safety, points, normals, self.camera, count=CAMERA_CANDIDATES,
+                                  near=self.safe_distance + self.safety.cell, safe_distance=self.safe_distance,
+                                  rng=self.rng)
+        return self.mounted(views)
+
+    def extra_gain(self, views: Views) -> NDArray[np.int64]:
+        assert self.camera is not None
+        points, normals = self.unseen()
+        return stereo_gain(self.grid, points, normals, views.positions,
+                           camera_rotations(views.heading_deg, self.camera.R_body_cam), self.camera)
 
     def with_extra(self, u: NDArray[np.float64], extra: NDArray[np.int64]) -> NDArray[np.float64]:
         return reconstruct_utility(u, extra, STEREO_WEIGHT)

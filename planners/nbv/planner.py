@@ -12,8 +12,9 @@ does the middle of that cycle:
   cast with a sparse ray grid (`prescreen_rays`, a sixth of the rays or so) and only the `shortlist` with the
   most unknown and contour voxels in it are cast in full: the utility ranks the informative candidates, and an
   iteration's ray casting shrinks about threefold;
-* `extra_gain(views)` / `with_extra(u, extra)`: hooks for a goal besides mapping (the `reconstruct` goal's stereo
-  coverage): a count per candidate that joins the pre-screen's ranking and the utility; by default none;
+* `extra_candidates()`, `extra_gain(views)`, `with_extra(u, extra)`: hooks for a goal besides mapping (the
+  `reconstruct` goal's stereo coverage): more candidates, and a count per candidate that joins the pre-screen's
+  ranking and the utility; by default none;
 * `reject(view)`: the agent could not reach a proposed view; candidates near it are skipped from then on.
 """
 
@@ -96,6 +97,11 @@ class NbvPlanner(MapKeeping):
         views = self.mounted(candidate_views(grid, self.safety, pose.point, self.scanner, count=self.candidates,
                                              safe_distance=self.safe_distance, band=self.band, rng=self.rng,
                                              contour=contour, max_rounds=self.candidate_rounds))
+        more = self.extra_candidates()
+        if more is not None and len(more):
+            views = Views(np.concatenate([views.positions, more.positions]),
+                          np.concatenate([views.heading_deg, more.heading_deg]),
+                          np.concatenate([views.pitch_deg, more.pitch_deg]))
         if self.rejected and len(views):
             near = np.min(np.linalg.norm(views.positions[:, None, :] - np.asarray(self.rejected)[None], axis=2),
                           axis=1)
@@ -125,6 +131,10 @@ class NbvPlanner(MapKeeping):
         if terms.f.max() < self.min_unknown and (extra is None or int(extra.max()) < self.min_extra):
             return None
         return views[best]
+
+    def extra_candidates(self) -> Views | None:
+        """Candidates a goal besides mapping adds to the shell's (mounted as the sensor allows); None: none."""
+        return None
 
     def extra_gain(self, views: Views) -> NDArray[np.int64] | None:
         """A count per candidate that a goal besides mapping adds to the utility (`with_extra`); None: none."""

@@ -33,7 +33,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from planners.nbv.candidates import is_safe_view
 from planners.nbv.grid import FREE, OCCUPIED, StateGrid
+from planners.nbv.views import Views
+from planners.rrt import ClearanceGrid
 
 Array = NDArray[np.float64]
 USEFUL_RANGE_SHARE = 0.75
@@ -145,6 +148,31 @@ def stereo_gain(grid: StateGrid, points: Array, normals: Array, positions: Array
     for i in range(len(positions)):
         out[i] = int(seen_from(points, normals, positions[i], R_world_cam[i], camera, grid).sum())
     return out
+
+
+def camera_candidates(grid: StateGrid, safety: ClearanceGrid, points: Array, normals: Array, camera: Camera, *,
+                      count: int, near: float, safe_distance: float, rng: np.random.Generator) -> Views:
+    """Up to `count` views that put a surface point (drawn from `points`, those not yet seen well) at the centre of
+    the camera's image, between `near` and the useful range, facing it: the heading is the bearing against the
+    point's horizontal normal (± 30°; any heading for a point whose normal is near vertical), the position the
+    point less the range times the camera's optical axis at that heading. Kept when inside the grid, in free
+    space and safe (`is_safe_view`); pitch 0 (the planner's mount sets it)."""
+    if not len(points) or near >= camera.useful_range:
+        return Views(np.zeros((0, 3)), np.zeros(0), np.zeros(0))
+    k = rng.integers(len(points), size=4 * count)
+    n = normals[k]
+    flat = np.hypot(n[:, 0], n[:, 1]) > 0.3
+    heading = np.where(flat, np.degrees(np.arctan2(-n[:, 1], -n[:, 0])) + rng.uniform(-30.0, 30.0, len(k)),
+                       rng.uniform(0.0, 360.0, len(k))) % 360.0
+    axis = camera_rotations(heading, camera.R_body_cam)[:, :, 2]
+    r = rng.uniform(near, camera.useful_range, len(k))
+    p = points[k] - r[:, None] * axis
+    lo, hi = grid.origin + grid.resolution, grid.upper - grid.resolution
+    ok: NDArray[np.bool_] = np.asarray(((p > lo) & (p < hi)).all(axis=1))
+    ok[ok] = grid.state(p[ok]) == FREE
+    ok[ok] = is_safe_view(safety, p[ok], safe_distance)
+    keep = np.flatnonzero(ok)[:count]
+    return Views(p[keep], heading[keep], np.zeros(len(keep)))
 
 
 def reconstruct_utility(u: ArrayLike, gain: ArrayLike, weight: float) -> Array:

@@ -13,8 +13,10 @@ from planners.nbv import (
     OCCUPIED,
     UNKNOWN,
     Camera,
+    DerivedMaps,
     StateGrid,
     StereoCoverage,
+    camera_candidates,
     camera_rotations,
     reconstruct_utility,
     stereo_gain,
@@ -101,3 +103,19 @@ def test_surface_already_seen_well_adds_nothing() -> None:
     unseen = ~record.well.reshape(-1)[grid.occupied_ids]
     again = stereo_gain(grid, centres[unseen], normals[unseen], np.array([[-4.5, 0.0, 11.0]]), R, CAMERA)
     assert again[0] <= 4  # at most a few edge voxels the first pose missed
+
+
+def test_candidates_aimed_at_unseen_surface_see_it_well_and_keep_the_safe_distance() -> None:
+    grid, ijk, centres = box_grid()
+    normals = surface_normals(grid.states, ijk)
+    safety = DerivedMaps(grid, 0.5).safety
+    tilted = Camera.of_stereo(1200, 900, 1000.0, 8.0, np.array([[0.0, -0.7071, 0.7071], [1.0, 0.0, 0.0],
+                                                                 [0.0, 0.7071, 0.7071]]))  # 45° down
+    views = camera_candidates(grid, safety, centres, normals, tilted, count=40, near=3.5, safe_distance=3.0,
+                              rng=np.random.default_rng(2))
+    assert len(views) >= 20
+    nearest = np.min(np.linalg.norm(views.positions[:, None, :] - centres[None], axis=2), axis=1)
+    assert np.all(nearest >= 3.0)
+    gain = stereo_gain(grid, centres, normals, views.positions, camera_rotations(views.heading_deg,
+                                                                                 tilted.R_body_cam), tilted)
+    assert np.mean(gain > 0) >= 0.9
