@@ -27,7 +27,7 @@ from planners.nbv import Camera, Scan, Scanner, View, Weights, run_exploration
 
 SEABED = 40.0
 NORTH, EAST = 20.0, 0.0
-SAFE = 3.0
+SAFE = 2.0
 TILT = 45.0
 CAMERA = Camera.of_stereo(1200, 900, 1000.0, 8.0, mount_rotation(TILT))
 VIEWS = 8
