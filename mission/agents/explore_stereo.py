@@ -43,6 +43,9 @@ STEREO_TARGET = 0.90
 CAMERA_CANDIDATES = 100
 """Candidates aimed at unseen surface (`planners.nbv.camera_candidates`) added to the shell's at each proposal."""
 STEREO_WEIGHT = 0.6
+GAIN_SCALE = 0.05
+"""The stereo gain is normalised by at least this share of the object's mapped surface voxels
+(`planners.nbv.reconstruct_utility`'s `scale`)."""
 """Weight of the stereo term against the seed's utility (which keeps the map growing and the moves short)."""
 
 
@@ -89,6 +92,7 @@ class ReconstructNbv(FixedMountNbv):
 
     def extra_candidates(self) -> Views:
         assert self.camera is not None
+        self.stereo_share()  # the record up to date with the poses and map so far (a no-op when it is)
         points, normals = self.unseen()
         views = camera_candidates(self.grid, self.safety, points, normals, self.camera, count=CAMERA_CANDIDATES,
                                   near=self.safe_distance + self.safety.cell, safe_distance=self.safe_distance,
@@ -102,7 +106,7 @@ class ReconstructNbv(FixedMountNbv):
                            camera_rotations(views.heading_deg, self.camera.R_body_cam), self.camera)
 
     def with_extra(self, u: NDArray[np.float64], extra: NDArray[np.int64]) -> NDArray[np.float64]:
-        return reconstruct_utility(u, extra, STEREO_WEIGHT)
+        return reconstruct_utility(u, extra, STEREO_WEIGHT, scale=GAIN_SCALE * len(self.surface_ids()))
 
 
 def shell_band(camera: Camera, planning_distance: float, cell: float) -> float:

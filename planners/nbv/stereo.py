@@ -10,7 +10,8 @@ An occupied voxel of the map is *seen well* from a camera pose when
 * at an incidence of at most `MAX_INCIDENCE_DEG` between the viewing ray and the surface normal (the normal from
   the map: the gradient of solid — occupied or unknown — against free space around the voxel; where that gradient
   vanishes the normal is unknown and any incidence passes),
-* and no occupied voxel lies between the camera and it (unknown space is taken as clear, as visibility does).
+* and no occupied voxel lies between the camera and it, up to two voxels short of it (unknown space is taken as
+  clear, as visibility does).
 
 `StereoCoverage` keeps that record over the poses the camera was at; `stereo_gain` counts, for candidate views,
 the surface voxels not yet seen well that the camera would see well from them, and `reconstruct_utility` adds it
@@ -43,6 +44,8 @@ USEFUL_RANGE_SHARE = 0.75
 """The useful range as a share of the stereo camera's `max_range` (see the module docstring)."""
 MAX_INCIDENCE_DEG = 60.0
 """The largest angle between a viewing ray and the surface normal at which a surface counts as seen well."""
+OWN_LAYER = 2.0
+"""Voxels short of a surface voxel at which the occlusion test stops (`_occluded`)."""
 MIN_RANGE_M = 1.5
 """Nearer than this the range maps keep nothing (the disparity search's upper end)."""
 
@@ -109,7 +112,7 @@ def seen_from(points: Array, normals: Array, position: ArrayLike, R_world_cam: A
               grid: StateGrid | None = None) -> NDArray[np.bool_]:
     """(N,) whether each surface point (N, 3) with its normal (N, 3; zero: unknown) is seen well from a camera at
     `position` with axes `R_world_cam` (see the module docstring); with `grid`, occupied voxels between the camera
-    and the point (more than a voxel short of it) hide it."""
+    and the point (more than `OWN_LAYER` voxels short of it) hide it."""
     o = np.asarray(position, dtype=float).reshape(3)
     v = points - o
     dist = np.linalg.norm(v, axis=1)
@@ -127,13 +130,15 @@ def seen_from(points: Array, normals: Array, position: ArrayLike, R_world_cam: A
 
 
 def _occluded(grid: StateGrid, origin: Array, points: Array, dist: Array) -> NDArray[np.bool_]:
-    """(N,) whether an occupied voxel lies on the segment from `origin` to each point, stopping a voxel short."""
+    """(N,) whether an occupied voxel lies on the segment from `origin` to each point, stopping `OWN_LAYER`
+    voxels short: a ray meeting a face at up to 60° runs through the face's own voxel layer (half a voxel thick,
+    plus its staircase) for up to two voxels before the voxel it looks at."""
     step = 0.7 * grid.resolution
     k = max(1, math.ceil(float(dist.max()) / step))
     t = (np.arange(k) + 0.5) * step
     u = (points - origin) / np.maximum(dist, 1e-9)[:, None]
     samples = origin + u[:, :, None].transpose(0, 2, 1) * t[None, :, None]
-    before = t[None, :] < (dist[:, None] - grid.resolution)
+    before = t[None, :] < (dist[:, None] - OWN_LAYER * grid.resolution)
     states = grid.state(samples.reshape(-1, 3)).reshape(len(points), k)
     return np.asarray(((states == OCCUPIED) & before).any(axis=1))
 
@@ -175,16 +180,21 @@ def camera_candidates(grid: StateGrid, safety: ClearanceGrid, points: Array, nor
     return Views(p[keep], heading[keep], np.zeros(len(keep)))
 
 
-def reconstruct_utility(u: ArrayLike, gain: ArrayLike, weight: float) -> Array:
-    """The `reconstruct` goal's utility: (1 − weight)·u + weight·gain / max(gain), `u` the seed's utility of each
-    view and `gain` its `stereo_gain` (no gain anywhere: u alone, scaled).
+def reconstruct_utility(u: ArrayLike, gain: ArrayLike, weight: float, scale: float = 1.0) -> Array:
+    """The `reconstruct` goal's utility: (1 − weight)·u + weight·gain / max(max(gain), scale), `u` the seed's
+    utility of each view and `gain` its `stereo_gain`. `scale` (voxels) keeps a few stray voxels from counting as
+    much as a whole face: with the gain normalised by its maximum alone, a view that adds 3 voxels would score
+    as the best of views that add 300, and the planner would dither over what is left instead of mapping more.
 
     >>> reconstruct_utility([0.5, 0.4], [0, 30], 0.6).round(3).tolist()
     [0.2, 0.76]
+    >>> reconstruct_utility([0.5, 0.4], [0, 3], 0.6, scale=30.0).round(3).tolist()
+    [0.2, 0.22]
     """
     uu = np.asarray(u, dtype=float)
     g = np.asarray(gain, dtype=float)
-    norm = g / g.max() if len(g) and g.max() > 0 else np.zeros(len(g))
+    top = max(float(g.max()) if len(g) else 0.0, scale)
+    norm = g / top if top > 0 else np.zeros(len(g))
     return np.asarray((1.0 - weight) * uu + weight * norm)
 
 

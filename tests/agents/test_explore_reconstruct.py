@@ -69,12 +69,20 @@ def explore(world: MjWorld, knowledge: Knowledge, camera: Camera | None) -> tupl
     sensor = Scanner3D(world, (60.0, 45.0), 12.0, rays=(48, 36), tilt_deg=25.0, range_sigma=0.01, seed=5)
     poses: list[np.ndarray] = []
 
+    last: list[np.ndarray] = []
+
     def sense(view: View) -> Scan:
         n, e, d = view.position
         run.views.append((0.0, n, e, d, view.heading_deg))
-        poses.append(camera_pose(n, e, d, view.heading_deg, R_body_cam=mount_rotation(TILT)))
-        if isinstance(run.planner, ReconstructNbv):
-            run.planner.add_pose(n, e, d, view.heading_deg)
+        # A pair every metre of the move and one at the view, the vehicle holding the view's heading on the way
+        # (as the agent's station keeping does; the camera takes pairs all along).
+        steps = max(1, math.ceil(float(np.linalg.norm(view.point - last[-1])))) if last else 1
+        for f in np.linspace(0.0, 1.0, steps + 1)[1:] if last else [1.0]:
+            p = last[-1] + f * (view.point - last[-1]) if last else view.point
+            poses.append(camera_pose(*p, view.heading_deg, R_body_cam=mount_rotation(TILT)))
+            if isinstance(run.planner, ReconstructNbv):
+                run.planner.add_pose(*p, view.heading_deg)
+        last.append(view.point)
         hits = sensor.scan(n, e, d, view.heading_deg)
         ranges = np.where(hits.hit, hits.ranges, sensor.max_range)
         return scan_of(ScanFrame(0.0, ranges, hits.directions_body, hits.hit, sensor.max_range, n, e, d,
