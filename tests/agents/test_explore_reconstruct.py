@@ -30,18 +30,23 @@ NORTH, EAST = 20.0, 0.0
 SAFE = 2.0
 TILT = 45.0
 CAMERA = Camera.of_stereo(1200, 900, 1000.0, 8.0, mount_rotation(TILT))
-VIEWS = 8
+VIEWS = 5
+
+
+PARTS = [{"shape": "box", "size": [4.0, 4.0, 0.4], "at": [0, 0, -0.2]},  # wellhead-x's shape (worlds/sps_field)
+         {"shape": "cylinder", "radius": 0.6, "height": 2.6, "at": [0, 0, -1.7]},
+         {"shape": "box", "size": [1.6, 0.4, 0.4], "at": [0.9, 0, -2.2]}]
+TARGET = Target("wellhead", NORTH, EAST, 2.9, SEABED - 3.0, SEABED, 4.0, 4.0, 20.0, "detected")
 
 
 @pytest.fixture(scope="module")
 def world() -> MjWorld:
-    """A 3 × 2 m frame 0.6 m high with a post (r 0.4, 2 m) on it, on a flat seabed."""
+    """A wellhead (a 4 × 4 m base frame, a 2.6 m tree, a flowline stub) on a flat seabed."""
     w = World.model_validate({
-        "name": "post", "seabed": {"north": [-30, 70], "east": [-50, 50], "resolution": 1.0, "mean_depth": SEABED,
-                                   "roughness": {"amplitude": 0.0}},
-        "objects": [{"id": "post", "pose": {"north": NORTH, "east": EAST, "depth": SEABED + 0.03, "heading": 0.0},
-                     "parts": [{"shape": "box", "size": [3.0, 2.0, 0.6], "at": [0, 0, -0.3]},
-                               {"shape": "cylinder", "radius": 0.4, "height": 2.0, "at": [0.5, 0, -1.6]}]}]})
+        "name": "wellhead", "seabed": {"north": [-30, 70], "east": [-50, 50], "resolution": 1.0,
+                                       "mean_depth": SEABED, "roughness": {"amplitude": 0.0}},
+        "objects": [{"id": "wellhead", "pose": {"north": NORTH, "east": EAST, "depth": SEABED + 0.03,
+                                                "heading": 20.0}, "parts": PARTS}]})
     return MjWorld(build_scene(w))
 
 
@@ -61,9 +66,8 @@ def knowledge_with_survey(world: MjWorld) -> Knowledge:
 
 def explore(world: MjWorld, knowledge: Knowledge, camera: Camera | None) -> tuple[TargetRun, list[np.ndarray]]:
     """`VIEWS` views of the exploration loop; the true left-camera pose of each (teleported: true = estimated)."""
-    target = Target("post", NORTH, EAST, 1.9, SEABED - 2.6, SEABED, 3.0, 2.0, 0.0, "detected")
     model = Scanner((60.0, 45.0), 12.0, (24, 18))
-    run = target_run(target, knowledge, model, Weights(0.3, 0.5, 0.2), SAFE + 1.0, SEABED - 12.0, seed=5,
+    run = target_run(TARGET, knowledge, model, Weights(0.3, 0.5, 0.2), SAFE + 1.0, SEABED - 12.0, seed=5,
                      here=(NORTH - 12.0, EAST), tilt_deg=25.0, camera=camera)
     assert not run.stop_reason
     sensor = Scanner3D(world, (60.0, 45.0), 12.0, rays=(48, 36), tilt_deg=25.0, range_sigma=0.01, seed=5)
@@ -79,9 +83,10 @@ def explore(world: MjWorld, knowledge: Knowledge, camera: Camera | None) -> tupl
         steps = max(1, math.ceil(float(np.linalg.norm(view.point - last[-1])))) if last else 1
         for f in np.linspace(0.0, 1.0, steps + 1)[1:] if last else [1.0]:
             p = last[-1] + f * (view.point - last[-1]) if last else view.point
-            poses.append(camera_pose(*p, view.heading_deg, R_body_cam=mount_rotation(TILT)))
+            pn, pe, pd = (float(x) for x in p)
+            poses.append(camera_pose(pn, pe, pd, view.heading_deg, R_body_cam=mount_rotation(TILT)))
             if isinstance(run.planner, ReconstructNbv):
-                run.planner.add_pose(*p, view.heading_deg)
+                run.planner.add_pose(pn, pe, pd, view.heading_deg)
         last.append(view.point)
         hits = sensor.scan(n, e, d, view.heading_deg)
         ranges = np.where(hits.hit, hits.ranges, sensor.max_range)
@@ -93,14 +98,17 @@ def explore(world: MjWorld, knowledge: Knowledge, camera: Camera | None) -> tupl
 
 
 def test_the_reconstruct_goal_sees_more_of_the_true_surface_well_than_the_map_goal(world: MjWorld) -> None:
+    """Five views each (here the map goal's camera sees 78 % of the true surface well, the reconstruct goal's
+    87 %; the planner's own record, over the surface mapped so far, reads 92 %)."""
     knowledge = knowledge_with_survey(world)
     obj = world.scene.objects[0]
     shares = {}
+    own = math.nan
     for goal, camera in (("map", None), ("reconstruct", CAMERA)):
         run, poses = explore(world, knowledge, camera)
         shares[goal], _ = stereo_coverage(obj, world.scene, poses, CAMERA.fov_deg, CAMERA.useful_range,
                                           CAMERA.min_range)
         if isinstance(run.planner, ReconstructNbv):
             own = run.planner.stereo_share()
-    assert shares["reconstruct"] >= shares["map"] + 0.15, shares
-    assert math.isfinite(own) and 0.0 < own <= 1.0
+    assert shares["reconstruct"] >= 0.8 and shares["reconstruct"] >= shares["map"] + 0.05, shares
+    assert shares["reconstruct"] - 0.05 <= own <= 1.0  # the record never lags the truth by much
