@@ -25,6 +25,7 @@ from mission.artifacts import Artifacts
 from mission.errors import LinkLostError
 from mission.knowledge import Knowledge
 from mission.language.models import Mission, RouteElement, Transit
+from mission.language.mount import R_body_cam_of
 from mission.plugin_host import PluginHost
 from mission.safety import SafetyMonitors, Violation, abort_legs, policy_record
 from mission.stereo_recording import RECORDING_ACTIONS, ElementStereo
@@ -164,8 +165,7 @@ class Executive:
             return rep
         aided = self.usbl_available and agent.navigation == "usbl"
         self.vehicle.set_aiding(aided)
-        stereo = self.mission.sensors.stereo
-        recording = ElementStereo(self.artifacts.root, element_id, stereo.mount.R_body_cam() if stereo else None) \
+        recording = ElementStereo(self.artifacts.root, element_id, R_body_cam_of(self.mission.sensors.stereo)) \
             if any(a in RECORDING_ACTIONS for a in element.actions) else None
         extra = frozenset({"stereo"}) if recording is not None else frozenset()
         payload, rate = agent.payload, agent.frame_rate_hz

@@ -38,6 +38,7 @@ from mission.agents.explore_nbv import (
     RESOLUTION_M,
     FixedMountNbv,
     TargetRun,
+    iteration_figures,
     mount_tilt_deg,
     nbv_results,
     path_safe,
@@ -47,11 +48,12 @@ from mission.agents.explore_nbv import (
 from mission.agents.explore_region import (
     targets,
 )
-from mission.agents.explore_stereo import STEREO_TARGET, ReconstructNbv, camera_of, climb_clear
+from mission.agents.explore_stereo import add_pairs, camera_for, climb_clear, stereo_figures, target_reached
 from mission.agents.report import ExploreReport
 from mission.agents.station_path import StationPath
 from mission.frames import wrap_deg
-from mission.language.models import EXPLORE_NAV_MARGIN_M, Explore
+from mission.language.actions import EXPLORE_NAV_MARGIN_M
+from mission.language.models import Explore
 from mission.vehicle import Command, NavState, Observation, ScanFrame
 from planners.nbv import UNKNOWN, NbvPlanner, Scanner, View, Weights, connect
 
@@ -110,11 +112,7 @@ class ExploreAgent(Agent):
                              PLANNING_RAYS)
         self.safe = p.safe_distance + NAV_MARGIN_M
         self.weights = Weights(p.weights.distance, p.weights.frontier, p.weights.contour)
-        self.camera = None
-        if p.goal == "reconstruct":
-            if m.sensors.stereo is None:
-                raise ValueError("explore with `goal: reconstruct` needs `sensors.stereo`")
-            self.camera = camera_of(m.sensors.stereo)
+        self.camera = camera_for(p, m)
         self.payload = frozenset({"scanner"} | ({"stereo"} if self.camera is not None else set()))
         self.tilt: float | None = None
         self.index = -1
@@ -173,10 +171,7 @@ class ExploreAgent(Agent):
             return command
         for frame in observation.scans:
             self._integrate(frame)
-        if self.run is not None and isinstance(self.run.planner, ReconstructNbv) and self.phase is not Phase.LEAVE:
-            for _ in observation.stereo:  # each pair the camera took, at the estimated pose of this tick
-                self.run.planner.add_pose(nav.north, nav.east, nav.depth, nav.heading)
-                self.run.stereo_pairs += 1
+        add_pairs(self.run, observation, self.phase is not Phase.LEAVE)
         budget_left = self.params.budget - (nav.time - self.t0)
         climb = max(0.0, nav.depth - self.exit_depth) / CLIMB_RATE + 15.0
         if self.phase is not Phase.LEAVE and budget_left <= climb:
@@ -273,11 +268,7 @@ class ExploreAgent(Agent):
         assert run is not None and self.goal is not None
         t0, c0 = time.perf_counter(), time.process_time()
         run.estimate = run.coverage_estimate()
-        if isinstance(run.planner, ReconstructNbv):
-            done = self._stereo_done(nav, run, run.planner)
-        else:
-            done = run.estimate >= COVERAGE_TARGET
-        if done:
+        if target_reached(self.context, run, nav.time, COVERAGE_TARGET):
             self._next_target(nav, "coverage target")
             return self._hold() if self.phase is not Phase.APPROACH else self._approach(nav, here)
         pose = View.at(here, nav.heading, -(self.tilt or 25.0))
@@ -294,12 +285,9 @@ class ExploreAgent(Agent):
         path = connect(run.planner.safety, here, view.point, self.safe, seed=self.context.mission.seed)
         run.iterations_ms.append(1e3 * (time.perf_counter() - t0))
         run.iterations_cpu_ms.append(1e3 * (time.process_time() - c0))
-        if path is None and isinstance(run.planner, ReconstructNbv):
-            up = climb_clear(run.planner.safety, here, self.safe)
-            if up is not None:  # the vehicle, not the view, is what no path leaves from: climb clear first
-                run.climbs += 1
-                self._go(View.at(up, nav.heading, -(self.tilt or 25.0)), np.stack([here, up]))
-                return self._move(nav, here)
+        if path is None and (up := climb_clear(run, here, self.safe)) is not None:  # no path leaves the vehicle
+            self._go(View.at(up, nav.heading, -(self.tilt or 25.0)), np.stack([here, up]))
+            return self._move(nav, here)
         if path is None:
             run.planner.reject(view)
             run.rejected += 1
@@ -310,15 +298,6 @@ class ExploreAgent(Agent):
         self.rejections = 0
         self._go(view, path)
         return self._move(nav, here)
-
-    def _stereo_done(self, nav: NavState, run: TargetRun, planner: ReconstructNbv) -> bool:
-        """`reconstruct` goal: bring the stereo coverage record up to date, log it, and whether it reached the
-        target (on an object bounded from enough sides: `TargetRun.bounded`)."""
-        share = run.stereo_share = planner.stereo_share()
-        self.context.emit("explore_stereo_coverage", nav.time, element=self.context.element.id,
-                          object=run.target.id, view=len(run.views), pairs=run.stereo_pairs,
-                          share_percent=round(100.0 * share, 1), bounded=round(run.bounded(), 2))
-        return run.bounded() * share >= STEREO_TARGET
 
     def _leave(self) -> None:
         self.phase = Phase.LEAVE
@@ -341,27 +320,12 @@ class ExploreAgent(Agent):
             self.photo.finish(self.report)
             return
         objects, products = nbv_results(self.runs, self.t0)
-        all_it = [t for r in self.runs for t in r.iterations_ms]
-        all_cpu = [t for r in self.runs for t in r.iterations_cpu_ms]
         self.report.objects, self.report.views = objects, sum(len(r.views) for r in self.runs)
         self.report.resolution_m = RESOLUTION_M
-        self.report.figures.update({
-            "iteration_time_ms": {"mean": round(float(np.mean(all_it)), 1) if all_it else None,
-                                  "max": round(float(np.max(all_it)), 1) if all_it else None},
-            "iteration_cpu_ms": {"mean": round(float(np.mean(all_cpu)), 1) if all_cpu else None,
-                                 "max": round(float(np.max(all_cpu)), 1) if all_cpu else None},
-            "safe_distance_m": self.params.safe_distance, "planning_distance_m": self.safe,
-            "scanner_tilt_deg": round(self.tilt, 2) if self.tilt is not None else None})
-        stereo = self.context.mission.sensors.stereo
-        if stereo is not None and (self.camera is not None or {"model", "record"} & set(self.context.element.actions)):
-            camera = camera_of(stereo)  # what the truth's stereo coverage scores the recorded pairs with
-            self.report.figures["goal"] = self.params.goal
-            self.report.figures["stereo_camera"] = {"fov_deg": [round(a, 3) for a in camera.fov_deg],
-                                                    "useful_range_m": camera.useful_range,
-                                                    "min_range_m": camera.min_range}
-            shares = [r.stereo_share for r in self.runs if r.stereo_share is not None]
-            if shares:
-                self.report.figures["stereo_coverage_estimate_percent"] = round(100.0 * float(np.mean(shares)), 1)
+        self.report.figures.update({**iteration_figures(self.runs), "safe_distance_m": self.params.safe_distance,
+                                    "planning_distance_m": self.safe,
+                                    "scanner_tilt_deg": round(self.tilt, 2) if self.tilt is not None else None})
+        self.report.figures.update(stereo_figures(self.runs, self.context, self.params.goal))
         self.context.knowledge.maps[self.context.element.id] = {
             **products, "explore_track": np.asarray(self.track, dtype=np.float64).reshape(-1, 4),
             "explore_resolution": np.array(RESOLUTION_M)}

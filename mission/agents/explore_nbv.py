@@ -265,6 +265,16 @@ def path_safe(planner: NbvPlanner, points: np.ndarray, safe: float) -> bool:
     return all(segment_safe(planner.safety, a, b, safe) for a, b in zip(points[:-1], points[1:], strict=True))
 
 
+def iteration_figures(runs: list[TargetRun]) -> dict[str, dict[str, float | None]]:
+    """Mean and max wall and CPU time of the runs' iterations (completeness estimate + propose + connect)."""
+    out: dict[str, dict[str, float | None]] = {}
+    for key, times in (("iteration_time_ms", [t for r in runs for t in r.iterations_ms]),
+                       ("iteration_cpu_ms", [t for r in runs for t in r.iterations_cpu_ms])):
+        out[key] = {"mean": round(float(np.mean(times)), 1) if times else None,
+                    "max": round(float(np.max(times)), 1) if times else None}
+    return out
+
+
 def nbv_results(runs: list[TargetRun], t0: float) -> tuple[list[ExploredObject], dict[str, np.ndarray]]:
     """Each explored object's figures, and the products of the run folder: the occupied voxels, views, known
     volume over time and exploration boxes of all runs (a last column says which run)."""

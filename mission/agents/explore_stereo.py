@@ -18,13 +18,16 @@ it climbs clear first (`climb_clear`) instead of giving the view up.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mission.agents.explore_nbv import FixedMountNbv
-from mission.language.models import Stereo
+from mission.agents.base import AgentContext
+from mission.agents.explore_nbv import FixedMountNbv, TargetRun
+from mission.language.models import Explore, Mission, Stereo
 from mission.language.mount import R_body_cam_of
+from mission.vehicle import Observation
 from planners.nbv import (
     Camera,
     StereoCoverage,
@@ -36,7 +39,6 @@ from planners.nbv import (
     stereo_gain,
     surface_normals,
 )
-from planners.rrt import ClearanceGrid
 
 STEREO_TARGET = 0.90
 """The element stops once this share of the object's mapped surface was seen well by the stereo camera."""
@@ -118,15 +120,68 @@ def shell_band(camera: Camera, planning_distance: float, cell: float) -> float:
 CLIMB_STEPS_M = (0.5, 1.0, 1.5, 2.0, 3.0)
 
 
-def climb_clear(safety: ClearanceGrid, here: ArrayLike, safe: float) -> NDArray[np.float64] | None:
-    """The nearest point straight above `here` that the paths between views may start from (`is_safe`), when
-    `here` is not one; None when `here` is one or none within 3 m is. Views near the planning distance leave the
+def climb_clear(run: TargetRun, here: ArrayLike, safe: float) -> NDArray[np.float64] | None:
+    """`reconstruct` goal, when no path to a proposed view was found: the nearest point straight above `here` that
+    the paths between views may start from (`is_safe`) when `here` is not one (counted in `run.climbs`); None
+    when `here` is one, when none within 3 m is, or for the `map` goal. Views near the planning distance leave the
     vehicle there, and a frame that reveals more of the structure can put it under the paths' threshold."""
+    if not isinstance(run.planner, ReconstructNbv):
+        return None
     p = np.asarray(here, dtype=float).reshape(3)
-    if is_safe(safety, p[None], safe)[0]:
+    if is_safe(run.planner.safety, p[None], safe)[0]:
         return None
     for dz in CLIMB_STEPS_M:
         q = p - np.array([0.0, 0.0, dz])
-        if is_safe(safety, q[None], safe)[0]:
+        if is_safe(run.planner.safety, q[None], safe)[0]:
+            run.climbs += 1
             return np.asarray(q, dtype=np.float64)
     return None
+
+
+def camera_for(p: Explore, mission: Mission) -> Camera | None:
+    """The camera an explore element plans for: the mission's stereo camera with `goal: reconstruct`, else none."""
+    if p.goal != "reconstruct":
+        return None
+    if mission.sensors.stereo is None:
+        raise ValueError("explore with `goal: reconstruct` needs `sensors.stereo`")
+    return camera_of(mission.sensors.stereo)
+
+
+def add_pairs(run: TargetRun | None, observation: Observation, exploring: bool) -> None:
+    """Each stereo pair of a tick into the coverage record, at the tick's estimated pose (`reconstruct` only, while
+    `exploring`)."""
+    if run is not None and exploring and isinstance(run.planner, ReconstructNbv):
+        nav = observation.nav
+        for _ in observation.stereo:
+            run.planner.add_pose(nav.north, nav.east, nav.depth, nav.heading)
+            run.stereo_pairs += 1
+
+
+def target_reached(context: AgentContext, run: TargetRun, time: float, map_target: float) -> bool:
+    """Whether a run's stopping figure reached its target: `goal: map`, the map's own completeness estimate
+    (`run.estimate`) against `map_target`; `goal: reconstruct`, the stereo coverage record brought up to date and
+    logged (`explore_stereo_coverage`), its share seen well times how far the object is bounded
+    (`TargetRun.bounded`) against `STEREO_TARGET`."""
+    if not isinstance(run.planner, ReconstructNbv):
+        return run.estimate >= map_target
+    share = run.stereo_share = run.planner.stereo_share()
+    context.emit("explore_stereo_coverage", time, element=context.element.id, object=run.target.id,
+                 view=len(run.views), pairs=run.stereo_pairs, share_percent=round(100.0 * share, 1),
+                 bounded=round(run.bounded(), 2))
+    return run.bounded() * share >= STEREO_TARGET
+
+
+def stereo_figures(runs: list[TargetRun], context: AgentContext, goal: str) -> dict[str, Any]:
+    """The element's stereo figures for `metrics.json` when its stereo camera records or plans: the goal, the
+    camera as the truth's stereo coverage scores it (`mission.sim.stereo_coverage`), and the own estimate."""
+    stereo = context.mission.sensors.stereo
+    if stereo is None or (goal != "reconstruct" and not {"model", "record"} & set(context.element.actions)):
+        return {}
+    camera = camera_of(stereo)
+    out: dict[str, Any] = {"goal": goal, "stereo_camera": {
+        "fov_deg": [round(a, 3) for a in camera.fov_deg], "useful_range_m": camera.useful_range,
+        "min_range_m": camera.min_range}}
+    shares = [r.stereo_share for r in runs if r.stereo_share is not None]
+    if shares:
+        out["stereo_coverage_estimate_percent"] = round(100.0 * float(np.mean(shares)), 1)
+    return out

@@ -22,7 +22,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from mission.errors import Diagnostic
-from mission.language.models import ELEMENT_KINDS, EXPLORE_NAV_MARGIN_M, Explore, RouteElement, Sensors
+from mission.language.models import ELEMENT_KINDS, Explore, RouteElement, Sensors
 from mission.language.source import Located, PathKey
 
 ACTION_KINDS: Mapping[str, tuple[str, ...]] = {
@@ -37,6 +37,9 @@ REQUIRED_ACTIONS: Mapping[str, tuple[tuple[str, str], ...]] = {  # kind: (action
     "inspect": (("photograph", "photographs are what an inspection makes"),)}
 EXPLORE_SENSORS: Mapping[str, tuple[str, ...]] = {"next-best-view": ("scanner",), "rrt-photo": ("stereo",)}
 PHOTOGRAPHING_PLANNERS = ("rrt-photo",)  # explore planners that take photographs (the others scan)
+EXPLORE_NAV_MARGIN_M = 1.0
+"""What next-best-view exploration adds to `safe_distance` for the navigation error between its map and the truth
+(its planning distance; `mission.agents.explore.NAV_MARGIN_M`)."""
 
 
 def kinds_taking(action: str) -> tuple[str, ...]:
