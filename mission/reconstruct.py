@@ -14,13 +14,15 @@ above that plane are the object, and the outputs keep it with `SEABED_MARGIN_M` 
 
 Outputs in the output folder (default RUN/models/ID/reconstruction): `mesh.ply` and `mesh.glb` (the cleaned mesh
 with grey vertex colours, through trimesh), `points.ply` (the range maps' points, every 4th pixel, in the world
-frame), `report.json` (frames, timings, mesh size, the seabed plane and the object's extent above it) and
-`mesh.png` (a shaded picture of the mesh), and `object.yaml`: an `objects:` entry for a mission's database
+frame), `report.json` (frames, timings, mesh size, the seabed plane and the object's extent above it),
+`mesh.png` (a shaded picture of the mesh), `camera_poses.txt` (the poses the range maps were fused at, KITTI's 12
+numbers a line: `mission.reconstruct_poses`), `model/ID.yaml` (the multi-view model a later mission references
+itself by: `mission.reconstruct_model`), and `object.yaml`: an `objects:` entry for a mission's database
 (`database_entry`: pose, size and characteristic-point sets (`detected_point_sets`: points the referencing
 plug-in's detector finds again and again in the close views; else corners of the mesh), the targets the designer
-names, converted to the object frame, and `mesh: mesh.ply`, the mesh beside it. The entry names its mesh with
-`mesh:`, not `model:`: a database object's `model:` is a multi-view model file that the referencing plug-ins load
-as such (`mission.plugin_settings`), and a mesh is not one).
+names, converted to the object frame, `mesh: mesh.ply`, the mesh beside it, and `model: model/ID.yaml`). A
+database object's `model:` is the multi-view model file that the referencing plug-ins load as such
+(`mission.plugin_settings`); the mesh, which is not one, is named by `mesh:`.
 """
 
 from __future__ import annotations
@@ -268,57 +270,28 @@ def database_entry(object_id: str, vertices: Array, plane: Array, targets: tuple
     return entry
 
 
-def detected_point_sets(recording: Recording, plane: Array, lo: Array, hi: Array, reach_m: float = 4.0,
-                        min_height_m: float = 0.25, every: int = 2, max_range_m: float = 8.0) -> list[Any]:
-    """Sets of points the stereo-referencing plug-in's detector finds on the object (world frame), or [] when
-    fewer than 4: the views within `reach_m` (horizontally) of the box (lo, hi)'s centre, every `every`-th, through
-    the plug-in's own front end (`stereo_cloud`: Harris corners, its feature budget and range), placed at the
-    recording's poses; the points `min_height_m` above the seabed plane in the box that many views found again
-    (`stable_points`), grouped by `group_sets`."""
-    import cv2
-
-    from perception_plugins.reconstruction.keypoints import group_sets, stable_points
-    from perception_plugins.referencing.plugin import MAX_FEATURES  # the proposed sets hold what it will detect
-    from perception_plugins.stereo import RectifiedStereo, stereo_cloud
-
-    first = cv2.imread(str(recording.left[0]), cv2.IMREAD_GRAYSCALE)
-    if first is None:
-        return []
-    geometry = RectifiedStereo.from_K(recording.K, recording.baseline, (first.shape[1], first.shape[0]))
-    centre = 0.5 * (lo + hi)
-    clouds = []
-    for k in range(0, len(recording.left), every):
-        T = recording.poses[k]
-        if np.linalg.norm(T[:2, 3] - centre) > reach_m:
-            continue
-        left = cv2.imread(str(recording.left[k]), cv2.IMREAD_GRAYSCALE)
-        right = cv2.imread(str(recording.right[k]), cv2.IMREAD_GRAYSCALE)
-        if left is None or right is None:
-            continue
-        pair = np.asarray(left, np.uint8), np.asarray(right, np.uint8)
-        points = stereo_cloud(*pair, geometry, detector="harris", max_features=MAX_FEATURES,
-                              max_range=max_range_m).points_cam
-        world = points @ T[:3, :3].T + T[:3, 3]
-        height = plane[0] * world[:, 0] + plane[1] * world[:, 1] + plane[2] - world[:, 2]
-        inside = np.all((world[:, :2] >= lo - 0.2) & (world[:, :2] <= hi + 0.2), axis=1)
-        clouds.append(world[(height > min_height_m) & inside])
-    stable = stable_points(clouds)
-    return group_sets(stable, 5, 2, 0.1) if len(stable) >= 4 else []
-
-
 def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
-                    voxel_m: float = 0.02, targets: tuple[NamedTarget, ...] = (), element: str | None = None
-                    ) -> dict[str, Any]:
+                    voxel_m: float = 0.02, targets: tuple[NamedTarget, ...] = (), element: str | None = None,
+                    poses: str = "anchored") -> dict[str, Any]:
     """Reconstruct the object from the run's recording (`find_recording`) and write the outputs; returns the
-    report. `targets` (world NED) go into the database entry in its object frame."""
+    report. `targets` (world NED) go into the database entry in its object frame. `poses`: "anchored" fuses at the
+    navigation poses held together by stereo odometry (`mission.reconstruct_poses`), "navigation" at the
+    recording's own."""
     import cv2
 
     from mission.reconstruct_io import render_picture, write_mesh, write_points
+    from mission.reconstruct_model import object_model
+    from mission.reconstruct_poses import anchored_recording
+    from mission.reconstruct_sets import detected_point_sets
     from perception_plugins.reconstruction import RangeSettings, ReconstructionSettings, fuse_views, points_from_range
 
     recording = read_recording(find_recording(run_dir, object_id, element))
+    graph = None
+    if poses == "anchored":
+        recording, graph = anchored_recording(recording)
     out = out_dir or run_dir / "models" / object_id / "reconstruction"
     out.mkdir(parents=True, exist_ok=True)
+    np.savetxt(out / "camera_poses.txt", recording.poses[:, :3, :4].reshape(-1, 12), fmt="%.9e")
     maps: list[Any] = []
 
     def views() -> Any:
@@ -360,14 +333,19 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     if region is not None:
         proposals = detected_point_sets(recording, plane, region[0], region[1])
     entry = database_entry(object_id, mesh.vertices, plane, targets, "mesh.ply", proposals) if len(above) else None
+    model: dict[str, Any] | None = None
     if entry is not None:
         import yaml
 
+        entry["model"], model = object_model(recording, entry, out)
+        if entry["model"] is None:
+            del entry["model"]
         (out / "object.yaml").write_text(yaml.safe_dump({"objects": [entry]}, sort_keys=False), encoding="utf-8")
     write_points(points, point_grey, out / "points.ply")
     render_picture(mesh, out / "mesh.png", title=f"{object_id}: {len(mesh.faces):,} triangles")
     report: dict[str, Any] = {
-        "object": object_id, "recording": str(recording.folder), "pose_file": recording.pose_file,
+        "object": object_id, "recording": str(recording.folder), "pose_file": recording.pose_file, "poses": poses,
+        "graph": graph,
         "point_sets_from": "detector" if proposals else "mesh corners",
         "frames": result.frames, "voxel_m": voxel_m, "match_scale": scale,
         "triangles": int(len(mesh.faces)), "triangles_before_cleaning": int(len(result.raw_mesh.faces)),
@@ -380,12 +358,13 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
                     "fusion_per_frame": float(np.median(result.fusion_s)),
                     "extract_and_clean": result.extract_s, "wall_total": time.perf_counter() - t0},
         "volume_mb": round(result.volume.nbytes / 1e6, 2),
-        "files": ["mesh.ply", "mesh.glb", "points.ply", "mesh.png", "report.json"]
-        + (["object.yaml"] if entry is not None else []), "out": str(out),
+        "files": ["mesh.ply", "mesh.glb", "points.ply", "mesh.png", "report.json", "camera_poses.txt"]
+        + (["object.yaml"] if entry is not None else []) + ([entry["model"]] if entry and "model" in entry else []),
+        "model": model, "out": str(out),
     }
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
     return report
 
 
-__all__ = ["NamedTarget", "Recording", "ReconstructionError", "database_entry", "detected_point_sets",
-           "find_recording", "isolate_object", "parse_target", "read_recording", "reconstruct_run", "seabed_plane"]
+__all__ = ["NamedTarget", "Recording", "ReconstructionError", "database_entry", "find_recording", "isolate_object",
+           "parse_target", "read_recording", "reconstruct_run", "seabed_plane"]

@@ -120,16 +120,17 @@ class ElementStereo:
 
     def __init__(self, root: Path | None, element_id: str, R_body_cam: Array | None = None):
         self.relpath = f"stereo/{element_id}"
-        self.R_body_cam = R_body_cam  # the camera's mount (None: looking down)
+        self.R_body_cam = R_BODY_CAM if R_body_cam is None else np.asarray(R_body_cam, dtype=float)
         self.pairs = 0
         self._recorder = StereoRecorder(root / self.relpath, ("poses",)) if root is not None else None
 
     def add(self, observation: Observation) -> None:
-        """Record the pairs of one tick at the tick's estimated pose (position, measured depth and heading)."""
+        """Record the pairs of one tick at the tick's estimated pose (position, measured depth and heading) and the
+        camera's mount (`R_body_cam`, looking down by default)."""
         nav = observation.nav
         for images in observation.stereo:
             T_world_left = camera_pose(nav.north, nav.east, nav.depth, nav.heading, baseline=float(images.baseline),
-                                       R_body_cam=R_BODY_CAM if self.R_body_cam is None else self.R_body_cam)
+                                        R_body_cam=self.R_body_cam)
             if self._recorder is not None:
                 self._recorder.write(images, T_world_left)
             self.pairs += 1

@@ -2,13 +2,14 @@
 
 1. `docs/missions/sps_explore_model_near.yaml`: a survey finds wellhead-x (the database lacks it), the reference
    mission's explore element scans it with `actions: [map, model]` and records the stereo pairs (RUN/explore);
-2. `auv reconstruct RUN/explore --object wellhead-x --element scan-unknown`: the mesh, then the database entry with
-   three named targets (RUN/explore/recon/object.yaml). A designer names a target where the mesh shows it, in the
-   mesh's frame (the explore run's navigation frame); the script does so by moving each target's true position by
-   the mesh's offset from the true geometry (`mission.reconstruct_loop.mesh_offset`), the navigation error the
-   reconstruction inherited;
-3. a follow-up mission that knows wellhead-x only from that entry (`follow_up_mission`: transit, inspect all its
-   targets, home; no truth) is simulated for each seed (RUN/inspect-seed-N), and each photograph's true camera
+2. `auv reconstruct RUN/explore --object wellhead-x --element scan-unknown`: the poses anchored by stereo odometry,
+   the mesh, the multi-view model, then the database entry with three named targets (RUN/explore/recon/object.yaml).
+   A designer names a target where the mesh shows it, in the mesh's frame (the explore run's navigation frame);
+   the script does so by moving each target's true position by the mesh's offset from the true geometry
+   (`mission.reconstruct_loop.mesh_offset`), the navigation error the reconstruction inherited;
+3. a follow-up mission that knows wellhead-x only from that entry and the multi-view model `auv reconstruct` built
+   beside the mesh (`follow_up_mission`: transit, inspect all its targets with the `multiview-referencing` plug-in,
+   home; no truth) is simulated for each seed (RUN/inspect-seed-N), and each photograph's true camera
    is compared with the viewpoint placed on its target's true position (`mission.reconstruct_loop`).
 
     .venv/bin/python docs/missions/reconstruction_loop.py RUN_DIR [SEEDS]     # SEEDS like 1,2,3 (default)
@@ -21,6 +22,7 @@ from __future__ import annotations
 import json
 import sys
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -32,7 +34,6 @@ from mission.language.loader import load_mission
 from mission.language.world import World
 from mission.reconstruct import (
     database_entry,
-    detected_point_sets,
     find_recording,
     isolate_object,
     parse_target,
@@ -40,6 +41,7 @@ from mission.reconstruct import (
     reconstruct_run,
 )
 from mission.reconstruct_loop import mesh_offset, photo_errors, recognitions
+from mission.reconstruct_sets import detected_point_sets
 from mission.sim.run import simulate
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -51,8 +53,10 @@ TARGETS = {  # true world positions (local NED, m) on worlds/sps_field.yaml's we
 STANDOFF_M = 3.0
 
 
-def follow_up_mission(entry: dict[str, Any], mesh: Path, seed: int) -> dict[str, Any]:
-    """The second mission: wellhead-x from the entry only, approached by USBL, its targets photographed."""
+def follow_up_mission(entry: dict[str, Any], recon: Path, seed: int, referencing: str = "multiview-referencing"
+                      ) -> dict[str, Any]:
+    """The second mission: wellhead-x from the entry only (its mesh and multi-view model in `recon`), approached by
+    USBL, its targets photographed; the object recognised by `referencing` (the multi-view model by default)."""
     template = yaml.safe_load((ROOT / "docs" / "missions" / "sps_explore_model.yaml").read_text(encoding="utf-8"))
     north, east = entry["pose"]["north"] + entry["size"][0] / 2, entry["pose"]["east"] + entry["size"][1] / 2
     return {
@@ -62,9 +66,10 @@ def follow_up_mission(entry: dict[str, Any], mesh: Path, seed: int) -> dict[str,
         "vehicle": template["vehicle"],
         "sensors": {**{k: template["sensors"][k] for k in ("usbl", "dvl")},
                     "stereo": {**template["sensors"]["stereo"], "rate_hz": 10}},
-        "plugins": {"referencing": "stereo-referencing", "odometry": "stereo-vo"},
+        "plugins": {"referencing": referencing, "odometry": "stereo-vo"},
         "safety": {**template["safety"], "max_duration": "1h"},
-        "objects": [{**entry, "mesh": str(mesh)}],
+        "objects": [{**entry, "mesh": str((recon / "mesh.ply").resolve())}
+                    | ({"model": str((recon / entry["model"]).resolve())} if "model" in entry else {})],
         "route": [
             {"id": "approach", "transit": {"to": {"north": round(north, 2), "east": round(east, 2)}, "depth": 45,
                                            "navigation": "usbl"}},
@@ -98,8 +103,14 @@ def name_targets(recon: Path) -> np.ndarray:
     # The sets as `auv reconstruct` proposes them (the plug-in's detector on the close views), from the mesh written.
     region = isolate_object(vertices, plane)
     recording = read_recording(find_recording(recon.parent, "wellhead-x", "scan-unknown"))
+    fused = np.loadtxt(recon / "camera_poses.txt").reshape(-1, 3, 4)  # the poses the mesh was fused at
+    recording = replace(recording, poses=np.concatenate([fused, np.tile([[[0.0, 0, 0, 1]]], (len(fused), 1, 1))], 1))
     proposals = detected_point_sets(recording, region[2], region[0], region[1]) if region is not None else []
     entry = database_entry("wellhead-x", vertices, plane, targets, "mesh.ply", proposals)
+    assert entry is not None
+    written = yaml.safe_load((recon / "object.yaml").read_text(encoding="utf-8"))["objects"][0]
+    if "model" in written:  # the multi-view model `auv reconstruct` built beside the mesh
+        entry["model"] = written["model"]
     (recon / "object.yaml").write_text(yaml.safe_dump({"objects": [entry]}, sort_keys=False), encoding="utf-8")
     (recon / "offset.json").write_text(json.dumps({"mesh_offset_m": offset.round(4).tolist()}) + "\n",
                                        encoding="utf-8")
@@ -119,7 +130,7 @@ def main() -> None:
     summary = []
     for seed in seeds:
         path = run / f"inspect-seed-{seed}.yaml"
-        path.write_text(yaml.safe_dump(follow_up_mission(entry, (recon / "mesh.ply").resolve(), seed),
+        path.write_text(yaml.safe_dump(follow_up_mission(entry, recon, seed),
                                        sort_keys=False), encoding="utf-8")
         out = run / f"inspect-seed-{seed}"
         if not (out / "metrics.json").is_file():

@@ -63,6 +63,9 @@ def test_reconstruct_writes_a_mesh_on_the_true_object_and_its_files(run_dir: Pat
         assert (out / name).stat().st_size > 500, name
     report = json.loads((out / "report.json").read_text())
     assert report["pose_file"] == "nav.txt" and report["frames"] == len(views.poses)
+    # Seven views 50° apart around the object: the graph measures no motion between them and keeps navigation's.
+    assert report["poses"] == "anchored" and report["graph"]["pairs_tried"] >= len(views.poses) - 1
+    assert report["graph"]["moved_from_navigation_m"]["max"] < 0.01
     plane = report["seabed_plane"]
     # The flat seabed. At these small images (fx 400) the fused seabed comes out ~9 cm shallow (the range maps
     # alone are within 2 cm): a known shortfall, bounded here so that it cannot grow unnoticed.
@@ -97,6 +100,8 @@ def test_the_database_entry_is_accepted_by_the_mission_language(run_dir: Path, t
     assert entry["size"][2] == pytest.approx(3.0, abs=0.25)
     assert entry["mesh"] == "mesh.ply"  # beside object.yaml; a mission names it relative to itself
     entry["mesh"] = str(run_dir / "out" / "mesh.ply")
+    assert entry["model"] == "model/wellhead-x.yaml"  # the multi-view model, beside it
+    entry["model"] = str(run_dir / "out" / "model" / "wellhead-x.yaml")
     mission = {"name": "uses-reconstruction", "objects": [entry],
                "sensors": {"usbl": {"sigma": 1.5}},
                "route": [{"id": "go", "transit": {"to": {"north": 0, "east": 0}, "depth": 20}}]}
@@ -105,6 +110,7 @@ def test_the_database_entry_is_accepted_by_the_mission_language(run_dir: Path, t
     loaded, diagnostics = validate_mission_file(path)
     assert [d for d in diagnostics if not d.warning] == [] and loaded is not None
     assert loaded.objects[0].mesh == str(run_dir / "out" / "mesh.ply")
+    assert loaded.objects[0].model == entry["model"]
     assert loaded.objects[0].characteristic_points[0].points[0] == pytest.approx(
         entry["characteristic_points"][0]["points"][0])
 
@@ -147,3 +153,27 @@ def test_an_entry_whose_mesh_is_not_a_mesh_is_refused_at_its_line(tmp_path: Path
     assert loaded is None and len(messages) == 2
     assert ":4:" in messages[0] and "not a PLY file" in messages[0]
     assert ":5:" in messages[1] and "not found" in messages[1]
+
+
+def test_the_model_beside_the_entry_places_a_camera_in_the_entry_frame_where_the_recording_put_it(
+        run_dir: Path, views: Views) -> None:
+    import yaml
+
+    from mission.frames import invert, pose_matrix
+    from perception_plugins.multiview import recognise
+    from perception_plugins.multiview.model_io import read_model
+
+    report = json.loads((run_dir / "out" / "report.json").read_text())
+    assert report["model"]["points"] > 200 and len(report["model"]["views"]) >= 2
+    entry = yaml.safe_load((run_dir / "out" / "object.yaml").read_text())["objects"][0]
+    model = read_model(run_dir / "out" / entry["model"])
+    poses = np.loadtxt(run_dir / "out" / "camera_poses.txt").reshape(-1, 3, 4)
+    T_world_db = pose_matrix(entry["pose"]["north"], entry["pose"]["east"], entry["pose"]["depth"], 0.0)
+    k = int(model.views[0].name)  # a view of the model, recognised again through the model's own frame and tie
+    T_world_cam = np.vstack([poses[k], [0.0, 0.0, 0.0, 1.0]])
+    frame = views.frames[k]
+    found = recognise(model, frame.left, frame.right, frame.K, frame.baseline, T_world_cam)
+    assert found.identified and found.T_object_work is not None
+    T_db_cam = model.T_database_object @ found.T_object_work
+    expected = invert(T_world_db) @ T_world_cam
+    assert np.linalg.norm(T_db_cam[:3, 3] - expected[:3, 3]) < 0.02
