@@ -9,7 +9,8 @@ share of samples is the share of area. A sample is seen from a pair when it lies
 between the camera's nearest and useful range, at incidence ≤ 60°, and is not hidden by the object itself: every
 sample is splatted into a coarse depth buffer of the view (`BUFFER_PX` pixels a side at most, and no pixel
 smaller than 1.5 sample spacings at the nearest sample, so that a face has no holes), and a sample farther than
-`DEPTH_TOLERANCE_M` behind the nearest sample of its pixel is hidden. The seabed hides nothing here (samples in contact with it are not counted).
+`DEPTH_TOLERANCE_M` behind the nearest sample of its pixel is hidden. The seabed hides nothing here (samples in
+contact with it are not counted).
 """
 
 from __future__ import annotations

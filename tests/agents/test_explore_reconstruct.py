@@ -19,7 +19,7 @@ from mission.knowledge import Knowledge
 from mission.language.mount import mount_rotation
 from mission.sim.mjworld import MjWorld
 from mission.sim.scanner import Scanner3D
-from mission.sim.stereo_coverage import stereo_coverage
+from mission.sim.stereo_coverage import seen_by_view, stereo_coverage, surface_samples
 from mission.vehicle import ScanFrame
 from mission.world.model import World
 from mission.world.scene import build_scene
@@ -112,3 +112,23 @@ def test_the_reconstruct_goal_sees_more_of_the_true_surface_well_than_the_map_go
             own = run.planner.stereo_share()
     assert shares["reconstruct"] >= 0.8 and shares["reconstruct"] >= shares["map"] + 0.05, shares
     assert shares["reconstruct"] - 0.05 <= own <= 1.0  # the record never lags the truth by much
+
+
+def test_the_truth_counts_the_face_a_camera_sees_head_on_in_range_and_nothing_from_beyond_it() -> None:
+    """`mission.sim.stereo_coverage` on a 2 m cube on the seabed, a camera looking ahead (north) at its south face
+    from 4 m and from 8 m: the south face's samples (and no others) are seen from 4 m; nothing from 8 m."""
+    w = World.model_validate({
+        "name": "cube", "seabed": {"north": [-20, 20], "east": [-20, 20], "resolution": 1.0, "mean_depth": SEABED,
+                                   "roughness": {"amplitude": 0.0}},
+        "objects": [{"id": "cube", "pose": {"north": 0.0, "east": 0.0, "depth": SEABED, "heading": 0.0},
+                     "parts": [{"shape": "box", "size": [2.0, 2.0, 2.0], "at": [0, 0, -1.0]}]}]})
+    scene = build_scene(w)
+    points, normals = surface_samples(scene.objects[0], scene)
+    south = np.isclose(normals[:, 0], -1.0)
+    assert south.any() and (~south).sum() > 3 * south.sum()  # the top and four sides; the bottom is buried
+    ahead = mount_rotation(0.0)
+    near = seen_by_view(points, normals, camera_pose(-5.0, 0.0, SEABED - 1.0, 0.0, R_body_cam=ahead),
+                        CAMERA.fov_deg, CAMERA.useful_range, CAMERA.min_range)
+    far = seen_by_view(points, normals, camera_pose(-9.0, 0.0, SEABED - 1.0, 0.0, R_body_cam=ahead),
+                       CAMERA.fov_deg, CAMERA.useful_range, CAMERA.min_range)
+    assert np.array_equal(near, south) and not far.any()
