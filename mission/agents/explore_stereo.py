@@ -45,10 +45,10 @@ STEREO_TARGET = 0.90
 CAMERA_CANDIDATES = 100
 """Candidates aimed at unseen surface (`planners.nbv.camera_candidates`) added to the shell's at each proposal."""
 STEREO_WEIGHT = 0.6
+"""Weight of the stereo term against the seed's utility (which keeps the map growing and the moves short)."""
 GAIN_SCALE = 0.05
 """The stereo gain is normalised by at least this share of the object's mapped surface voxels
 (`planners.nbv.reconstruct_utility`'s `scale`)."""
-"""Weight of the stereo term against the seed's utility (which keeps the map growing and the moves short)."""
 
 
 def camera_of(stereo: Stereo) -> Camera:
