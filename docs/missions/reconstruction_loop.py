@@ -97,7 +97,9 @@ def name_targets(recon: Path) -> np.ndarray:
     plane = np.array([report["seabed_plane"][k] for k in "abc"])
     vertices = np.asarray(trimesh.load(recon / "mesh.ply", process=False).vertices, dtype=float)
     height = plane[0] * vertices[:, 0] + plane[1] * vertices[:, 1] + plane[2] - vertices[:, 2]
-    offset = mesh_offset(vertices[height > 0.2], true_surface())
+    surface = true_surface()
+    offset = mesh_offset(vertices[height > 0.2], surface)
+    errors = np.abs(surface(vertices[height > 0.2])), np.abs(surface(vertices[height > 0.2] - offset))
     targets = tuple(parse_target(f"{k}={n + offset[0]},{e + offset[1]},{d + offset[2]}:{STANDOFF_M}")
                     for k, (n, e, d) in TARGETS.items())
     # The sets as `auv reconstruct` proposes them (the plug-in's detector on the close views), from the mesh written.
@@ -112,8 +114,10 @@ def name_targets(recon: Path) -> np.ndarray:
     if "model" in written:  # the multi-view model `auv reconstruct` built beside the mesh
         entry["model"] = written["model"]
     (recon / "object.yaml").write_text(yaml.safe_dump({"objects": [entry]}, sort_keys=False), encoding="utf-8")
-    (recon / "offset.json").write_text(json.dumps({"mesh_offset_m": offset.round(4).tolist()}) + "\n",
-                                       encoding="utf-8")
+    figures = {"mesh_offset_m": offset.round(4).tolist()} | {
+        f"mesh_error_{name}_m": {"median": round(float(np.median(e)), 4), "p90": round(float(np.percentile(e, 90)), 4)}
+        for name, e in zip(("as_fused", "after_offset"), errors, strict=True)}
+    (recon / "offset.json").write_text(json.dumps(figures) + "\n", encoding="utf-8")
     return offset
 
 

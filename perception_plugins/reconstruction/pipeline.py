@@ -27,6 +27,12 @@ class ReconstructionSettings:
     """Truncation distance (default four voxels)."""
     range: RangeSettings = field(default_factory=RangeSettings)
     clean: CleanSettings = field(default_factory=CleanSettings)
+    max_sigma_m: float | None = 0.05
+    """Mesh only where the fused distance is this sure: a voxel's accumulated weight Σ(σ_ref/σ_Z)² is the inverse
+    variance of its fused distance in units of σ_ref, so the cubes meshed are those whose eight corners reach
+    (σ_ref / max_sigma_m)². A surface seen once from far (σ_Z of decimetres) is left out until more views agree.
+    On `auv bench reconstruction --quick` (wellhead-x, 9 views) 5 cm gives median / p90 / completeness
+    14.9 / 41.5 mm / 94.2 % against 17.8 / 57.0 mm / 96.0 % with every observed cube meshed (None)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,7 +91,7 @@ def fuse_range_maps(range_maps: Iterable[RangeMap], poses: Iterable[Array],
 def _finish(volume: HashedTsdf, s: ReconstructionSettings, depth_s: list[float],
             fusion_s: list[float]) -> Reconstruction:
     t0 = time.process_time()
-    raw = extract_mesh(volume)
+    raw = extract_mesh(volume, 0.0 if s.max_sigma_m is None else (volume.sigma_ref / s.max_sigma_m) ** 2)
     mesh = clean_mesh(raw, s.clean)
     return Reconstruction(mesh, raw, volume, len(fusion_s), depth_s, fusion_s, time.process_time() - t0)
 

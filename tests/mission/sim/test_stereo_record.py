@@ -151,3 +151,24 @@ def test_recording_needs_a_run_folder(tmp_path: Path) -> None:
     path.write_text(MISSION, encoding="utf-8")
     with pytest.raises(AuvError, match="needs a run folder"):
         simulate(load_mission(path), record_stereo=True)
+
+
+def test_an_elements_recording_places_a_tilted_camera_by_its_mount(tmp_path: Path) -> None:
+    from mission.language.mount import Mount
+    from mission.plugin_api import StereoImages
+    from mission.reconstruct import read_recording
+    from mission.stereo_recording import ElementStereo
+    from mission.vehicle import NavState, Observation
+
+    tilted = Mount(tilt_deg=30.0).R_body_cam()
+    nav = NavState(1.0, 10.0, 20.0, 30.0, 45.0, 1.0, 5.0, 0.5, 100.0)
+    grey = np.zeros((8, 12), np.uint8)
+    images = StereoImages(1.0, grey, grey, np.array([[10.0, 0, 6], [0, 10.0, 4], [0, 0, 1]]), 0.25)
+    recording = ElementStereo(tmp_path, "scan", tilted)
+    recording.add(Observation(nav, stereo=(images,)))
+    recording.close()
+    pose = read_recording(tmp_path / "stereo" / "scan").poses[0]
+    expected = camera_pose(10.0, 20.0, 30.0, 45.0, baseline=0.25, R_body_cam=tilted)
+    assert np.allclose(pose, expected, atol=1e-6)
+    looking_down = camera_pose(10.0, 20.0, 30.0, 45.0, baseline=0.25)
+    assert not np.allclose(pose[:3, :3], looking_down[:3, :3], atol=0.1)  # 60° apart: the mount is not ignored
