@@ -8,7 +8,9 @@ of docs/missions/sps_explore_reconstruct.yaml and docs/missions/sps_explore_reco
   the share of the same samples within 5 cm of a mesh vertex, as fused and after the mesh's best single shift
   (`mission.reconstruct_loop.mesh_offset`, the navigation error the mesh inherited).
 
-    python docs/missions/reconstruct_goal_figures.py runs/rec [--mesh]
+    python docs/missions/reconstruct_goal_figures.py runs/rec [--mesh [RECONSTRUCTION_DIR]]
+
+(RECONSTRUCTION_DIR: `auv reconstruct`'s output folder, default RUN/models/wellhead-x/reconstruction.)
 """
 
 from __future__ import annotations
@@ -58,10 +60,12 @@ def main() -> None:
           + " / ".join(f"{100 * at[m]:.1f} % at {m} s" for m in MARKS_S if m in at)
           + f"; {100 * seen.mean():.1f} % in all")
     if "--mesh" in sys.argv:
-        mesh_completeness(run, points, data)
+        after = sys.argv[sys.argv.index("--mesh") + 1:]
+        folder = Path(after[0]) if after else run / "models" / "wellhead-x" / "reconstruction"
+        mesh_completeness(folder, points, data)
 
 
-def mesh_completeness(run: Path, points: np.ndarray, data: dict) -> None:
+def mesh_completeness(folder: Path, points: np.ndarray, data: dict) -> None:
     import trimesh
     from scipy.spatial import cKDTree
 
@@ -75,12 +79,12 @@ def mesh_completeness(run: Path, points: np.ndarray, data: dict) -> None:
     def sdf(p: np.ndarray) -> np.ndarray:
         return np.asarray(np.min([part_sdf(q, p) for q in parts], axis=0))
 
-    mesh = trimesh.load(run / "models" / "wellhead-x" / "reconstruction" / "mesh.ply", process=False)
+    mesh = trimesh.load(folder / "mesh.ply", process=False)
     vertices = np.asarray(mesh.vertices, dtype=float)
     offset = mesh_offset(vertices[np.abs(sdf(vertices)) < 0.5], sdf)
     raw = np.isfinite(cKDTree(vertices).query(points, distance_upper_bound=0.05)[0]).mean()
     shifted = np.isfinite(cKDTree(vertices - offset).query(points, distance_upper_bound=0.05)[0]).mean()
-    print(f"{run}: mesh completeness (5 cm) {100 * raw:.1f} %, {100 * shifted:.1f} % after the shift "
+    print(f"{folder}: mesh completeness (5 cm) {100 * raw:.1f} %, {100 * shifted:.1f} % after the shift "
           f"{np.round(offset, 3).tolist()} m")
 
 
