@@ -19,7 +19,7 @@ def _reconstruct(args: argparse.Namespace) -> int:
     require("matplotlib", "the mesh picture (`auv reconstruct`)")
     targets = tuple(parse_target(t) for t in args.target)
     report = reconstruct_run(Path(args.run), args.object, Path(args.out) if args.out else None, args.voxel, targets,
-                             args.element, args.poses)
+                             args.element, args.poses, args.max_sigma or None)
     extent = report["object_extent"]
     print(f"{report['object']}: {report['frames']} frame(s) from {report['recording']} ({report['pose_file']}), "
           f"{report['triangles']:,} triangles, {report['area_m2']:.1f} m²"
@@ -39,6 +39,9 @@ def add_reconstruct_command(sub: Any) -> None:
                    help="fuse at the navigation poses held together by stereo odometry (anchored, the default: a pose "
                         "graph of the frames' relative motions and revisits, anchored to navigation) or at the "
                         "recording's navigation poses as they are")
+    p.add_argument("--max-sigma", type=float, default=0.06, metavar="M",
+                   help="mesh only where the fused distance is this sure, in metres (default 0.06; 0 meshes every "
+                        "observed voxel: for a low-resolution camera, whose single views are never that sure)")
     p.add_argument("--voxel", type=float, default=0.02, help="voxel size in metres (default 0.02)")
     p.add_argument("--target", action="append", default=[], metavar="NAME=N,E,D[:STANDOFF]",
                    help="a target for the database entry, in world NED metres (standoff in metres, default 2); "

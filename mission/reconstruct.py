@@ -272,11 +272,12 @@ def database_entry(object_id: str, vertices: Array, plane: Array, targets: tuple
 
 def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
                     voxel_m: float = 0.02, targets: tuple[NamedTarget, ...] = (), element: str | None = None,
-                    poses: str = "anchored") -> dict[str, Any]:
+                    poses: str = "anchored", max_sigma_m: float | None = 0.06) -> dict[str, Any]:
     """Reconstruct the object from the run's recording (`find_recording`) and write the outputs; returns the
     report. `targets` (world NED) go into the database entry in its object frame. `poses`: "anchored" fuses at the
     navigation poses held together by stereo odometry (`mission.reconstruct_poses`), "navigation" at the
-    recording's own."""
+    recording's own. `max_sigma_m`: mesh only where the fused distance is that sure (`ReconstructionSettings`;
+    None meshes every observed cube)."""
     import cv2
 
     from mission.reconstruct_io import render_picture, write_mesh, write_points
@@ -304,7 +305,7 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     t0 = time.perf_counter()
     # Match at about 600 pixels across (1200×900 pairs at half resolution; small images as they are).
     scale = max(1, int(round(2.0 * recording.K[0, 2] / MATCH_WIDTH_PX)))
-    settings = ReconstructionSettings(voxel_m=voxel_m, range=RangeSettings(scale=scale))
+    settings = ReconstructionSettings(voxel_m=voxel_m, range=RangeSettings(scale=scale), max_sigma_m=max_sigma_m)
     result = fuse_views(views(), recording.K, recording.baseline, settings, maps)
     if len(result.mesh.faces) == 0:
         raise ReconstructionError(f"{recording.folder}: the range maps yield no surface")
@@ -347,7 +348,7 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
         "object": object_id, "recording": str(recording.folder), "pose_file": recording.pose_file, "poses": poses,
         "graph": graph,
         "point_sets_from": "detector" if proposals else "mesh corners",
-        "frames": result.frames, "voxel_m": voxel_m, "match_scale": scale,
+        "frames": result.frames, "voxel_m": voxel_m, "match_scale": scale, "max_sigma_m": max_sigma_m,
         "triangles": int(len(mesh.faces)), "triangles_before_cleaning": int(len(result.raw_mesh.faces)),
         "area_m2": round(float(mesh.face_areas().sum()), 3),
         "seabed_plane": {"a": float(plane[0]), "b": float(plane[1]), "c": float(plane[2]),
