@@ -13,7 +13,8 @@
    the vehicle flies there on a safe path (`planners.nbv.connect`: straight when safe, else RRT* of
    `planners.rrt`), station keeping along it (`station_path.StationPath`) with the scanner pointed at the view's
    heading; a path that a later frame shows unsafe is abandoned and a new view proposed;
-3. stop when the map's own estimate of the object's observed surface reaches `COVERAGE_TARGET`, when no view
+3. stop when the map's own estimate of the object's observed surface reaches `COVERAGE_TARGET` (`goal:
+   reconstruct`: when the stereo camera has seen enough of the mapped surface well, `explore_stereo`), when no view
    would reveal anything, or when the element's budget (less the time to climb away) runs out; then climb back
    to the depth the element started at.
 
@@ -37,6 +38,7 @@ from mission.agents.explore_nbv import (
     RESOLUTION_M,
     FixedMountNbv,
     TargetRun,
+    iteration_figures,
     mount_tilt_deg,
     nbv_results,
     path_safe,
@@ -46,15 +48,17 @@ from mission.agents.explore_nbv import (
 from mission.agents.explore_region import (
     targets,
 )
+from mission.agents.explore_stereo import add_pairs, camera_for, climb_clear, stereo_figures, target_reached
 from mission.agents.report import ExploreReport
 from mission.agents.station_path import StationPath
 from mission.frames import wrap_deg
+from mission.language.actions import EXPLORE_NAV_MARGIN_M
 from mission.language.models import Explore
 from mission.vehicle import Command, NavState, Observation, ScanFrame
 from planners.nbv import UNKNOWN, NbvPlanner, Scanner, View, Weights, connect
 
 PLANNING_RAYS = (24, 18)  # the planner's model of the frustum; the sensor itself has more rays
-NAV_MARGIN_M = 1.0
+NAV_MARGIN_M = EXPLORE_NAV_MARGIN_M
 COVERAGE_TARGET = 0.97
 MAX_REJECTIONS = 10
 HEADING_TOLERANCE_DEG = 6.0
@@ -108,7 +112,8 @@ class ExploreAgent(Agent):
                              PLANNING_RAYS)
         self.safe = p.safe_distance + NAV_MARGIN_M
         self.weights = Weights(p.weights.distance, p.weights.frontier, p.weights.contour)
-        self.payload = frozenset({"scanner"})
+        self.camera = camera_for(p, m)
+        self.payload = frozenset({"scanner"} | ({"stereo"} if self.camera is not None else set()))
         self.tilt: float | None = None
         self.index = -1
         self.phase = Phase.APPROACH
@@ -137,7 +142,7 @@ class ExploreAgent(Agent):
         self.cruise_depth = min(nav.depth, target.top_depth - self.safe - 1.0)
         run = target_run(target, self.context.knowledge, self.model, self.weights, self.safe, self.cruise_depth - 1.0,
                          self.context.mission.seed + self.index, (nav.north, nav.east),
-                         self.tilt if self.tilt is not None else 25.0)
+                         self.tilt if self.tilt is not None else 25.0, camera=self.camera)
         self.runs.append(run)
         self.run = run
         if run.stop_reason:
@@ -166,6 +171,7 @@ class ExploreAgent(Agent):
             return command
         for frame in observation.scans:
             self._integrate(frame)
+        add_pairs(self.run, observation, self.phase is not Phase.LEAVE)
         budget_left = self.params.budget - (nav.time - self.t0)
         climb = max(0.0, nav.depth - self.exit_depth) / CLIMB_RATE + 15.0
         if self.phase is not Phase.LEAVE and budget_left <= climb:
@@ -262,7 +268,7 @@ class ExploreAgent(Agent):
         assert run is not None and self.goal is not None
         t0, c0 = time.perf_counter(), time.process_time()
         run.estimate = run.coverage_estimate()
-        if run.estimate >= COVERAGE_TARGET:
+        if target_reached(self.context, run, nav.time, COVERAGE_TARGET):
             self._next_target(nav, "coverage target")
             return self._hold() if self.phase is not Phase.APPROACH else self._approach(nav, here)
         pose = View.at(here, nav.heading, -(self.tilt or 25.0))
@@ -279,6 +285,9 @@ class ExploreAgent(Agent):
         path = connect(run.planner.safety, here, view.point, self.safe, seed=self.context.mission.seed)
         run.iterations_ms.append(1e3 * (time.perf_counter() - t0))
         run.iterations_cpu_ms.append(1e3 * (time.process_time() - c0))
+        if path is None and (up := climb_clear(run, here, self.safe)) is not None:  # no path leaves the vehicle
+            self._go(View.at(up, nav.heading, -(self.tilt or 25.0)), np.stack([here, up]))
+            return self._move(nav, here)
         if path is None:
             run.planner.reject(view)
             run.rejected += 1
@@ -311,17 +320,12 @@ class ExploreAgent(Agent):
             self.photo.finish(self.report)
             return
         objects, products = nbv_results(self.runs, self.t0)
-        all_it = [t for r in self.runs for t in r.iterations_ms]
-        all_cpu = [t for r in self.runs for t in r.iterations_cpu_ms]
         self.report.objects, self.report.views = objects, sum(len(r.views) for r in self.runs)
         self.report.resolution_m = RESOLUTION_M
-        self.report.figures.update({
-            "iteration_time_ms": {"mean": round(float(np.mean(all_it)), 1) if all_it else None,
-                                  "max": round(float(np.max(all_it)), 1) if all_it else None},
-            "iteration_cpu_ms": {"mean": round(float(np.mean(all_cpu)), 1) if all_cpu else None,
-                                 "max": round(float(np.max(all_cpu)), 1) if all_cpu else None},
-            "safe_distance_m": self.params.safe_distance, "planning_distance_m": self.safe,
-            "scanner_tilt_deg": round(self.tilt, 2) if self.tilt is not None else None})
+        self.report.figures.update({**iteration_figures(self.runs), "safe_distance_m": self.params.safe_distance,
+                                    "planning_distance_m": self.safe,
+                                    "scanner_tilt_deg": round(self.tilt, 2) if self.tilt is not None else None})
+        self.report.figures.update(stereo_figures(self.runs, self.context, self.params.goal))
         self.context.knowledge.maps[self.context.element.id] = {
             **products, "explore_track": np.asarray(self.track, dtype=np.float64).reshape(-1, 4),
             "explore_resolution": np.array(RESOLUTION_M)}

@@ -26,6 +26,7 @@ from planners.nbv import (
     FREE,
     OCCUPIED,
     UNKNOWN,
+    Camera,
     NbvPlanner,
     Scan,
     Scanner,
@@ -160,6 +161,11 @@ class TargetRun:
     """The object's region above the seabed, where the completeness estimate counts (None: none yet)."""
     foot: np.ndarray | None = None
     """The band just above the seabed, counted in the columns at the object's foot (`FOOT_BAND_M`)."""
+    stereo_share: float | None = None
+    """`reconstruct` goal: the share of the object's mapped surface the stereo camera has seen well."""
+    stereo_pairs: int = 0
+    climbs: int = 0
+    """`reconstruct` goal: climbs clear of a position no path left from (`explore_stereo.climb_clear`)."""
 
     def object_voxels(self) -> np.ndarray:
         """Flat grid ids of the occupied voxels of the object's region above the seabed."""
@@ -226,18 +232,27 @@ def start_view(planner: FixedMountNbv, target: Target, seabed: float, here: tupl
 
 
 def target_run(target: Target, knowledge: Knowledge, model: Scanner, weights: Weights, safe: float, ceiling: float,
-               seed: int, here: tuple[float, float], tilt_deg: float) -> TargetRun:
+               seed: int, here: tuple[float, float], tilt_deg: float, camera: Camera | None = None) -> TargetRun:
     """The exploration of one object: its box (no shallower than `ceiling`), a planner over a voxel map seeded
-    from the survey's height map, and a start view; without one, the run's `stop_reason` says so."""
+    from the survey's height map (with `camera`, the `reconstruct` goal's `explore_stereo.ReconstructNbv`), and a
+    start view; without one, the run's `stop_reason` says so."""
     lo, hi = exploration_box(target, safe, model.max_range, ceiling=ceiling)
     products = survey_map_for(knowledge, target)
     vm = prior_map(products, lo, hi, RESOLUTION_M, uncertain=PRIOR_UNCERTAIN_M)
     seabed = seabed_depth(products, target, target.radius + 1.0)
-    planner = FixedMountNbv(vm, lo, hi, model, weights=weights, safe_distance=safe, seed=seed)
+    if camera is None:
+        planner = FixedMountNbv(vm, lo, hi, model, weights=weights, safe_distance=safe, seed=seed)
+    else:
+        from mission.agents.explore_stereo import ReconstructNbv, shell_band  # it builds on this module
+
+        planner = ReconstructNbv(vm, lo, hi, model, weights=weights, safe_distance=safe, seed=seed, camera=camera)
+        planner.band = shell_band(camera, safe, planner.safety.cell)
     planner.focus = object_region(planner.grid, target, seabed)
     planner.min_unknown = MIN_UNKNOWN  # the object's region alone holds few unknown voxels a view can reach
     planner.shortlist = SHORTLIST
     region, foot = surface_region(planner.grid, planner.focus, seabed_plane(products, target, seabed), target)
+    if camera is not None:
+        planner.region = region  # type: ignore[attr-defined]
     start = start_view(planner, target, seabed, here, safe, tilt_deg)
     if start is None:
         return TargetRun(target, planner, lo, hi, seabed, View.at(target.centre), stop_reason="no safe starting view",
@@ -248,6 +263,16 @@ def target_run(target: Target, knowledge: Knowledge, model: Scanner, weights: We
 def path_safe(planner: NbvPlanner, points: np.ndarray, safe: float) -> bool:
     """Whether every segment of a path (points, N×3) keeps `safe` metres from what the planner's map holds."""
     return all(segment_safe(planner.safety, a, b, safe) for a, b in zip(points[:-1], points[1:], strict=True))
+
+
+def iteration_figures(runs: list[TargetRun]) -> dict[str, dict[str, float | None]]:
+    """Mean and max wall and CPU time of the runs' iterations (completeness estimate + propose + connect)."""
+    out: dict[str, dict[str, float | None]] = {}
+    for key, times in (("iteration_time_ms", [t for r in runs for t in r.iterations_ms]),
+                       ("iteration_cpu_ms", [t for r in runs for t in r.iterations_cpu_ms])):
+        out[key] = {"mean": round(float(np.mean(times)), 1) if times else None,
+                    "max": round(float(np.max(times)), 1) if times else None}
+    return out
 
 
 def nbv_results(runs: list[TargetRun], t0: float) -> tuple[list[ExploredObject], dict[str, np.ndarray]]:
@@ -278,7 +303,10 @@ def nbv_results(runs: list[TargetRun], t0: float) -> tuple[list[ExploredObject],
             "iteration_time_ms": {"mean": round(float(np.mean(it)), 1) if it else None,
                                   "max": round(float(np.max(it)), 1) if it else None},
             "scan_integration_ms": round(float(np.mean(run.integrate_ms)), 1) if run.integrate_ms else None,
-            "object_voxels_mapped": int(len(run.object_voxels()))}))
+            "object_voxels_mapped": int(len(run.object_voxels())),
+            **({} if run.stereo_share is None else {
+                "stereo_coverage_estimate_percent": round(100.0 * run.stereo_share, 1),
+                "stereo_pairs_planned_with": run.stereo_pairs, "climbs": run.climbs})}))
     products = {
         "explore_occupied": np.concatenate(occupied).astype(np.float32) if occupied else np.zeros((0, 4)),
         "explore_views": np.asarray(views, dtype=np.float64).reshape(-1, 6),

@@ -11,7 +11,10 @@ loader's checks of a route's `actions:` and of `explore.sensor` against it.
 
 An explore element flies with the sensor its planner uses: `next-best-view` scans with the 3-D scanner,
 `rrt-photo` photographs with the stereo camera (`EXPLORE_SENSORS`); `explore.sensor` names it, and any other is
-refused rather than silently replaced.
+refused rather than silently replaced. `goal: reconstruct` plans views for the stereo camera too: it needs
+`planner: next-best-view`, a stereo camera, and a useful range (`planners.nbv.USEFUL_RANGE_SHARE` of the
+camera's) beyond the planning distance (`safe_distance` + `EXPLORE_NAV_MARGIN_M`), or no view could ever see the
+object well (`check_explore_goal`).
 """
 
 from __future__ import annotations
@@ -34,6 +37,9 @@ REQUIRED_ACTIONS: Mapping[str, tuple[tuple[str, str], ...]] = {  # kind: (action
     "inspect": (("photograph", "photographs are what an inspection makes"),)}
 EXPLORE_SENSORS: Mapping[str, tuple[str, ...]] = {"next-best-view": ("scanner",), "rrt-photo": ("stereo",)}
 PHOTOGRAPHING_PLANNERS = ("rrt-photo",)  # explore planners that take photographs (the others scan)
+EXPLORE_NAV_MARGIN_M = 1.0
+"""What next-best-view exploration adds to `safe_distance` for the navigation error between its map and the truth
+(its planning distance; `mission.agents.explore.NAV_MARGIN_M`)."""
 
 
 def kinds_taking(action: str) -> tuple[str, ...]:
@@ -86,8 +92,38 @@ def check_actions(doc: Located, route: list[tuple[int, RouteElement]], sensors: 
                 out.append(doc.diagnostic(("route", i, element.kind), f"{element.kind} element '{element.id}' "
                                           f"must list `{needed}` in its actions: {why}"))
         p = element.params
+        if isinstance(p, Explore):
+            out.extend(check_explore_goal(doc, i, element.id, p, sensors))
         if isinstance(p, Explore) and p.sensor not in EXPLORE_SENSORS[p.planner]:
             uses = " or ".join(EXPLORE_SENSORS[p.planner])
             out.append(doc.diagnostic(("route", i, "explore", "sensor"), f"explore planner '{p.planner}' flies "
                                       f"with the {uses}, not the {p.sensor} (set `sensor: {uses}`)"))
     return out
+
+
+def check_explore_goal(doc: Located, i: int, element_id: str, p: Explore, sensors: Sensors | None
+                       ) -> list[Diagnostic]:
+    """The `reconstruct` goal without next-best-view, without a stereo camera, or with a camera whose useful
+    range does not reach past the planning distance."""
+    if p.goal != "reconstruct":
+        return []
+    where: PathKey = ("route", i, "explore", "goal")
+    if p.planner != "next-best-view":
+        return [doc.diagnostic(where, f"explore goal 'reconstruct' of '{element_id}' needs `planner: "
+                               f"next-best-view` (it plans the views; '{p.planner}' does not)")]
+    if sensors is None:
+        return []
+    if sensors.stereo is None:
+        return [doc.diagnostic(where, f"explore goal 'reconstruct' of '{element_id}' needs a stereo camera, "
+                               "which `sensors` does not configure (add `sensors.stereo`)")]
+    from planners.nbv import USEFUL_RANGE_SHARE
+
+    useful = USEFUL_RANGE_SHARE * sensors.stereo.max_range
+    planning = p.safe_distance + EXPLORE_NAV_MARGIN_M
+    if planning >= useful:
+        return [doc.diagnostic(where, f"explore goal 'reconstruct' of '{element_id}': the stereo camera's useful "
+                               f"range ({USEFUL_RANGE_SHARE:g} × max_range {sensors.stereo.max_range:g} m = "
+                               f"{useful:g} m) does not reach past the planning distance (safe_distance "
+                               f"{p.safe_distance:g} m + {EXPLORE_NAV_MARGIN_M:g} m margin = {planning:g} m): "
+                               "no view could see the object well; lower safe_distance or raise the range")]
+    return []

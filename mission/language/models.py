@@ -191,8 +191,7 @@ class Safety(Strict):
     abort_time: Annotated[Time, Field(ge=1.0)] = 1800.0  # the longest an abort may run past max_duration
     energy_reserve: Percent = 20.0
     on_violation: OnViolation = OnViolation()
-    # onboard: no heartbeat from the vehicle for this long is a lost link
-    link_timeout: Annotated[Duration, Field(ge=0.1, le=L.MAX_LINK_TIMEOUT_S)] = 3.0
+    link_timeout: Annotated[Duration, Field(ge=0.1, le=L.MAX_LINK_TIMEOUT_S)] = 3.0  # onboard: no heartbeat: lost
 
 
 class Pose(Strict):
@@ -290,6 +289,7 @@ class Explore(Strict):
     object: Identifier = "detected"
     sensor: Literal["scanner", "stereo", "mbes"] = "scanner"
     planner: Literal["next-best-view", "rrt-photo"] = "next-best-view"
+    goal: Literal["map", "reconstruct"] = "map"  # reconstruct: views for the stereo camera too (agents.explore_stereo)
     weights: Weights = Weights()
     safe_distance: Distance = 5.0
     budget: Time = 900.0

@@ -16,6 +16,10 @@ For each object the agent explored, matched to the true object it is (the neares
   vehicle);
 * the element's `path_length_m` is the true 3-D path length (the vehicle moves vertically between views).
 
+With a stereo camera recording (`model`, `record`, or `goal: reconstruct`), `stereo_coverage_true_percent`: the
+share of the object's true surface the recorded pairs saw within the useful range and at ≤ 60° incidence, from
+the true camera poses (`mission.sim.stereo_coverage`), and `stereo_pairs`.
+
 For photo surveys, `photo_coverage_percent` is the agent's (footprints at the estimated poses over the estimated
 object area); `photo_coverage_true_percent` places the same photographs at the true poses over the true object.
 """
@@ -238,4 +242,30 @@ def explore_truth(report: ExploreReport, rep: ElementReport, knowledge: Knowledg
     if min_distances:
         item["min_distance_to_object_m"] = round(min(min_distances), 3)
         item["safe_distance_breached"] = bool(min(min_distances) < safe_distance)
+    camera = report.figures.get("stereo_camera")
+    if camera is not None:
+        _stereo_truth(report, item, vehicle, scene, rep, camera)
     return item
+
+
+def _stereo_truth(report: ExploreReport, item: dict[str, Any], vehicle: SimulatedVehicle, scene: Scene,
+                  rep: ElementReport, camera: dict[str, Any]) -> None:
+    """`stereo_coverage_true_percent` per object and for the element (`mission.sim.stereo_coverage`), and
+    `stereo_pairs`: the pairs the camera took during the element."""
+    from mission.sim.stereo_coverage import stereo_coverage
+
+    poses = [T for t, T in vehicle.log.frames if rep.start_time <= t <= rep.end_time]
+    item["stereo_pairs"] = len(poses)
+    fov = (float(camera["fov_deg"][0]), float(camera["fov_deg"][1]))
+    shares = []
+    for explored, entry in zip(report.objects, item["objects"], strict=True):
+        obj = _true_object(explored, scene)
+        if obj is None:
+            continue
+        share, useful = stereo_coverage(obj, scene, poses, fov, float(camera["useful_range_m"]),
+                                        float(camera["min_range_m"]))
+        entry["stereo_coverage_true_percent"] = round(100.0 * share, 2)
+        entry["stereo_pairs_seeing_well"] = useful
+        shares.append(entry["stereo_coverage_true_percent"])
+    if shares:
+        item["stereo_coverage_true_percent"] = round(float(np.mean(shares)), 2)

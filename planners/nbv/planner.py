@@ -12,6 +12,9 @@ does the middle of that cycle:
   cast with a sparse ray grid (`prescreen_rays`, a sixth of the rays or so) and only the `shortlist` with the
   most unknown and contour voxels in it are cast in full: the utility ranks the informative candidates, and an
   iteration's ray casting shrinks about threefold;
+* `extra_candidates()`, `extra_gain(views)`, `with_extra(u, extra)`: hooks for a goal besides mapping (the
+  `reconstruct` goal's stereo coverage): more candidates, and a count per candidate that joins the pre-screen's
+  ranking and the utility; by default none;
 * `reject(view)`: the agent could not reach a proposed view; candidates near it are skipped from then on.
 """
 
@@ -69,6 +72,8 @@ class NbvPlanner(MapKeeping):
     band: float | None = None
     min_overlap: float = 0.1
     min_unknown: int = 20
+    min_extra: int = 1
+    """With an `extra_gain`, a view that adds at least this much is still worth the move."""
     candidate_rounds: int = 40
     shortlist: int | None = None
     """Candidates cast with every ray after the sparse pre-screen (None: all of them, no pre-screen)."""
@@ -92,6 +97,11 @@ class NbvPlanner(MapKeeping):
         views = self.mounted(candidate_views(grid, self.safety, pose.point, self.scanner, count=self.candidates,
                                              safe_distance=self.safe_distance, band=self.band, rng=self.rng,
                                              contour=contour, max_rounds=self.candidate_rounds))
+        more = self.extra_candidates()
+        if more is not None and len(more):
+            views = Views(np.concatenate([views.positions, more.positions]),
+                          np.concatenate([views.heading_deg, more.heading_deg]),
+                          np.concatenate([views.pitch_deg, more.pitch_deg]))
         if self.rejected and len(views):
             near = np.min(np.linalg.norm(views.positions[:, None, :] - np.asarray(self.rejected)[None], axis=2),
                           axis=1)
@@ -99,19 +109,40 @@ class NbvPlanner(MapKeeping):
         if not len(views):
             self.last = Proposal(views, None, -1, time.perf_counter() - t0)
             return None
+        extra = self.extra_gain(views)
         if self.shortlist is not None and len(views) > self.shortlist:
             sparse = visibility(grid, views, self.scanner.with_rays(self.prescreen_rays), contour=contour)
             gain = sparse.unknown / max(int(sparse.unknown.max()), 1) + sparse.contour / max(int(sparse.contour.max()),
                                                                                              1)
-            views = views.select(np.sort(np.argsort(-gain, kind="stable")[: self.shortlist]))
+            if extra is not None:
+                gain = gain + extra / max(int(extra.max()), 1)
+            keep = np.sort(np.argsort(-gain, kind="stable")[: self.shortlist])
+            views = views.select(keep)
+            extra = None if extra is None else extra[keep]
         terms = view_utility(grid, views, pose.point, self.scanner, self.weights, min_overlap=self.min_overlap,
                              contour=contour)
         # A view that would reveal nothing and follow no contour is not worth the move, however near it is.
-        best = int(np.argmax(np.where((terms.f > 0) | (terms.ct > 0), terms.u, -1.0)))
+        if extra is None:
+            best = int(np.argmax(np.where((terms.f > 0) | (terms.ct > 0), terms.u, -1.0)))
+        else:
+            u = self.with_extra(terms.u, extra)
+            best = int(np.argmax(np.where((terms.f > 0) | (terms.ct > 0) | (extra > 0), u, -1.0)))
         self.last = Proposal(views, terms, best, time.perf_counter() - t0)
-        if terms.f.max() < self.min_unknown:
+        if terms.f.max() < self.min_unknown and (extra is None or int(extra.max()) < self.min_extra):
             return None
         return views[best]
+
+    def extra_candidates(self) -> Views | None:
+        """Candidates a goal besides mapping adds to the shell's (mounted as the sensor allows); None: none."""
+        return None
+
+    def extra_gain(self, views: Views) -> NDArray[np.int64] | None:
+        """A count per candidate that a goal besides mapping adds to the utility (`with_extra`); None: none."""
+        return None
+
+    def with_extra(self, u: NDArray[np.float64], extra: NDArray[np.int64]) -> NDArray[np.float64]:
+        """The utility with the `extra_gain` counts in it (a subclass that has them says how)."""
+        return u
 
     def utility_grid(self) -> tuple[StateGrid, NDArray[np.int64]]:
         """The state grid candidates and the utility see, and the contour voxel ids that count (a subclass may
