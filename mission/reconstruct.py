@@ -335,10 +335,10 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
         proposals = detected_point_sets(recording, plane, region[0], region[1])
     if region is not None and not proposals and max_sigma_m is not None:
         # Corners of every observed cube within the outputs' box: the sure mesh loses the edges they sit on.
-        from perception_plugins.reconstruction import extract_mesh
+        from perception_plugins.reconstruction import clean_mesh, extract_mesh
         from perception_plugins.reconstruction.keypoints import propose_point_sets
 
-        loose = extract_mesh(result.volume).vertices
+        loose = clean_mesh(extract_mesh(result.volume), settings.clean).vertices
         keep = np.all((loose[:, :2] >= lo) & (loose[:, :2] <= hi), axis=1)
         keep &= plane[0] * loose[:, 0] + plane[1] * loose[:, 1] + plane[2] - loose[:, 2] > -0.05
         proposals = propose_point_sets(loose[keep], plane)

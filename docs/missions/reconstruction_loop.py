@@ -22,7 +22,6 @@ from __future__ import annotations
 import json
 import sys
 from collections.abc import Callable
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -34,15 +33,12 @@ from mission.language.loader import load_mission
 from mission.language.world import World
 from mission.reconstruct import (
     database_entry,
-    find_recording,
-    isolate_object,
     parse_target,
-    read_recording,
     reconstruct_run,
 )
 from mission.reconstruct_loop import mesh_offset, photo_errors, recognitions
-from mission.reconstruct_sets import detected_point_sets
 from mission.sim.run import simulate
+from perception_plugins.reconstruction.keypoints import PointSetProposal
 
 ROOT = Path(__file__).resolve().parents[2]
 TARGETS = {  # true world positions (local NED, m) on worlds/sps_field.yaml's wellhead-x, standoff 3 m
@@ -102,15 +98,13 @@ def name_targets(recon: Path) -> np.ndarray:
     errors = np.abs(surface(vertices[height > 0.2])), np.abs(surface(vertices[height > 0.2] - offset))
     targets = tuple(parse_target(f"{k}={n + offset[0]},{e + offset[1]},{d + offset[2]}:{STANDOFF_M}")
                     for k, (n, e, d) in TARGETS.items())
-    # The sets as `auv reconstruct` proposes them (the plug-in's detector on the close views), from the mesh written.
-    region = isolate_object(vertices, plane)
-    recording = read_recording(find_recording(recon.parent, "wellhead-x", "scan-unknown"))
-    fused = np.loadtxt(recon / "camera_poses.txt").reshape(-1, 3, 4)  # the poses the mesh was fused at
-    recording = replace(recording, poses=np.concatenate([fused, np.tile([[[0.0, 0, 0, 1]]], (len(fused), 1, 1))], 1))
-    proposals = detected_point_sets(recording, region[2], region[0], region[1]) if region is not None else []
+    # The sets `auv reconstruct` wrote (from the detector's views, else the mesh's corners), back in the world frame.
+    written = yaml.safe_load((recon / "object.yaml").read_text(encoding="utf-8"))["objects"][0]
+    origin = np.array([written["pose"][k] for k in ("north", "east", "depth")])
+    proposals = [PointSetProposal(np.asarray(s["points"], dtype=float) + origin, False)
+                 for s in written["characteristic_points"]]
     entry = database_entry("wellhead-x", vertices, plane, targets, "mesh.ply", proposals)
     assert entry is not None
-    written = yaml.safe_load((recon / "object.yaml").read_text(encoding="utf-8"))["objects"][0]
     if "model" in written:  # the multi-view model `auv reconstruct` built beside the mesh
         entry["model"] = written["model"]
     (recon / "object.yaml").write_text(yaml.safe_dump({"objects": [entry]}, sort_keys=False), encoding="utf-8")
