@@ -333,6 +333,7 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     proposals = []
     if region is not None:
         proposals = detected_point_sets(recording, plane, region[0], region[1])
+    sets_from = "detector" if proposals else "mesh corners"
     if region is not None and not proposals and max_sigma_m is not None:
         # Corners of every observed cube within the outputs' box: the sure mesh loses the edges they sit on.
         from perception_plugins.reconstruction import clean_mesh, extract_mesh
@@ -342,6 +343,7 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
         keep = np.all((loose[:, :2] >= lo) & (loose[:, :2] <= hi), axis=1)
         keep &= plane[0] * loose[:, 0] + plane[1] * loose[:, 1] + plane[2] - loose[:, 2] > -0.05
         proposals = propose_point_sets(loose[keep], plane)
+        sets_from = "corners of every observed cube"
     entry = database_entry(object_id, mesh.vertices, plane, targets, "mesh.ply", proposals) if len(above) else None
     model: dict[str, Any] | None = None
     if entry is not None:
@@ -356,7 +358,7 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
     report: dict[str, Any] = {
         "object": object_id, "recording": str(recording.folder), "pose_file": recording.pose_file, "poses": poses,
         "graph": graph,
-        "point_sets_from": "detector" if proposals else "mesh corners",
+        "point_sets_from": sets_from,
         "frames": result.frames, "voxel_m": voxel_m, "match_scale": scale, "max_sigma_m": max_sigma_m,
         "triangles": int(len(mesh.faces)), "triangles_before_cleaning": int(len(result.raw_mesh.faces)),
         "area_m2": round(float(mesh.face_areas().sum()), 3),
