@@ -282,10 +282,12 @@ def reconstruct_run(run_dir: Path, object_id: str, out_dir: Path | None = None,
 
     from mission.reconstruct_io import render_picture, write_mesh, write_points
     from mission.reconstruct_model import object_model
-    from mission.reconstruct_poses import anchored_recording
+    from mission.reconstruct_poses import POSE_SOURCES, anchored_recording
     from mission.reconstruct_sets import detected_point_sets
     from perception_plugins.reconstruction import RangeSettings, ReconstructionSettings, fuse_views, points_from_range
 
+    if poses not in POSE_SOURCES:
+        raise ReconstructionError(f"poses '{poses}': expected one of {', '.join(POSE_SOURCES)}")
     recording = read_recording(find_recording(run_dir, object_id, element))
     graph = None
     if poses == "anchored":

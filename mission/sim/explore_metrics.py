@@ -64,30 +64,41 @@ def _grid(a: float, b: float, spacing: float) -> Array:
     return np.asarray(a + (np.arange(n, dtype=np.float64) + 0.5) * ((b - a) / n), dtype=np.float64)
 
 
-def _local_surface(part: Part, spacing: float) -> Array:
-    """Surface points of a part in its own frame (centred; a cylinder along z)."""
+def local_samples(part: Part, spacing: float) -> tuple[Array, Array]:
+    """Surface points and outward normals of a part in its own frame (centred; a cylinder along z)."""
+    points, normals = [], []
     if isinstance(part, Box):
         half = 0.5 * np.asarray(part.size, dtype=np.float64)
-        out = []
         for axis in range(3):
             u, v = [a for a in range(3) if a != axis]
             uu, vv = np.meshgrid(_grid(-half[u], half[u], spacing), _grid(-half[v], half[v], spacing), indexing="ij")
             for sign in (-1.0, 1.0):
                 face = np.zeros((uu.size, 3))
                 face[:, axis], face[:, u], face[:, v] = sign * half[axis], uu.ravel(), vv.ravel()
-                out.append(face)
-        return np.concatenate(out)
+                n = np.zeros((uu.size, 3))
+                n[:, axis] = sign
+                points.append(face)
+                normals.append(n)
+        return np.concatenate(points), np.concatenate(normals)
     assert isinstance(part, Cylinder)
     r, h = part.radius, 0.5 * part.height
     angles = np.linspace(0.0, 2.0 * math.pi, max(8, math.ceil(2.0 * math.pi * r / spacing)), endpoint=False)
     aa, zz = np.meshgrid(angles, _grid(-h, h, spacing), indexing="ij")
-    parts = [np.stack([r * np.cos(aa.ravel()), r * np.sin(aa.ravel()), zz.ravel()], axis=1)]
+    radial = np.stack([np.cos(aa.ravel()), np.sin(aa.ravel()), np.zeros(aa.size)], axis=1)
+    points.append(radial * r + np.stack([np.zeros(aa.size), np.zeros(aa.size), zz.ravel()], axis=1))
+    normals.append(radial)
     for rho in _grid(0.0, r, spacing):
-        n = max(1, math.ceil(2.0 * math.pi * rho / spacing))
-        a = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
+        k = max(1, math.ceil(2.0 * math.pi * rho / spacing))
+        a = np.linspace(0.0, 2.0 * math.pi, k, endpoint=False)
         for z in (-h, h):
-            parts.append(np.stack([rho * np.cos(a), rho * np.sin(a), np.full(n, z)], axis=1))
-    return np.concatenate(parts)
+            points.append(np.stack([rho * np.cos(a), rho * np.sin(a), np.full(k, z)], axis=1))
+            normals.append(np.tile([0.0, 0.0, 1.0 if z > 0 else -1.0], (k, 1)))
+    return np.concatenate(points), np.concatenate(normals)
+
+
+def _local_surface(part: Part, spacing: float) -> Array:
+    """Surface points of a part in its own frame (centred; a cylinder along z)."""
+    return local_samples(part, spacing)[0]
 
 
 def distance_to_part(points: Array, obj: PlacedObject, part: Part) -> Array:

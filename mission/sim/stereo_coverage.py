@@ -20,8 +20,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from mission.sim.explore_metrics import CONTACT_M, _grid, distance_to_part, part_frame
-from mission.world.model import Box, Cylinder, Part
+from mission.sim.explore_metrics import CONTACT_M, distance_to_part, local_samples, part_frame
 from mission.world.scene import PlacedObject, Scene
 
 Array = NDArray[np.float64]
@@ -31,44 +30,12 @@ DEPTH_TOLERANCE_M = 0.08
 MAX_INCIDENCE_DEG = 60.0  # as planners.nbv.MAX_INCIDENCE_DEG (the simulator does not import planners)
 
 
-def _local_samples(part: Part, spacing: float) -> tuple[Array, Array]:
-    """Surface points and outward normals of a part in its own frame (centred; a cylinder along z)."""
-    points, normals = [], []
-    if isinstance(part, Box):
-        half = 0.5 * np.asarray(part.size, dtype=np.float64)
-        for axis in range(3):
-            u, v = [a for a in range(3) if a != axis]
-            uu, vv = np.meshgrid(_grid(-half[u], half[u], spacing), _grid(-half[v], half[v], spacing), indexing="ij")
-            for sign in (-1.0, 1.0):
-                face = np.zeros((uu.size, 3))
-                face[:, axis], face[:, u], face[:, v] = sign * half[axis], uu.ravel(), vv.ravel()
-                n = np.zeros((uu.size, 3))
-                n[:, axis] = sign
-                points.append(face)
-                normals.append(n)
-        return np.concatenate(points), np.concatenate(normals)
-    assert isinstance(part, Cylinder)
-    r, h = part.radius, 0.5 * part.height
-    angles = np.linspace(0.0, 2.0 * math.pi, max(8, math.ceil(2.0 * math.pi * r / spacing)), endpoint=False)
-    aa, zz = np.meshgrid(angles, _grid(-h, h, spacing), indexing="ij")
-    radial = np.stack([np.cos(aa.ravel()), np.sin(aa.ravel()), np.zeros(aa.size)], axis=1)
-    points.append(radial * r + np.stack([np.zeros(aa.size), np.zeros(aa.size), zz.ravel()], axis=1))
-    normals.append(radial)
-    for rho in _grid(0.0, r, spacing):
-        k = max(1, math.ceil(2.0 * math.pi * rho / spacing))
-        a = np.linspace(0.0, 2.0 * math.pi, k, endpoint=False)
-        for z in (-h, h):
-            points.append(np.stack([rho * np.cos(a), rho * np.sin(a), np.full(k, z)], axis=1))
-            normals.append(np.tile([0.0, 0.0, 1.0 if z > 0 else -1.0], (k, 1)))
-    return np.concatenate(points), np.concatenate(normals)
-
-
 def surface_samples(obj: PlacedObject, scene: Scene, spacing: float = SPACING_M) -> tuple[Array, Array]:
     """World points on the object's exposed surface and their outward normals (world frame)."""
     pts_out, nrm_out = [], []
     for k, placed in enumerate(obj.parts):
         R, c = part_frame(obj, placed.part)
-        local, normals = _local_samples(placed.part, spacing)
+        local, normals = local_samples(placed.part, spacing)
         pts, nrm = local @ R.T + c, normals @ R.T
         for j, other in enumerate(obj.parts):
             if j != k:

@@ -84,6 +84,11 @@ def test_reconstruct_writes_a_mesh_on_the_true_object_and_its_files(run_dir: Pat
     assert sum(len(g.faces) for g in glb.geometry.values()) == len(mesh.faces)
 
 
+def test_an_unknown_pose_source_is_refused_by_name(run_dir: Path) -> None:
+    with pytest.raises(ReconstructionError, match="anchored, navigation"):
+        reconstruct_run(run_dir, "wellhead-x", run_dir / "never", poses="nav")
+
+
 def test_a_run_without_a_recording_is_refused_with_the_places_looked_at(tmp_path: Path) -> None:
     with pytest.raises(ReconstructionError, match="models/wellhead-x"):
         reconstruct_run(tmp_path, "wellhead-x")
